@@ -1,0 +1,65 @@
+//! The commands behind the `baker` binary. `main.rs` only parses; everything runs from here.
+
+mod bake;
+mod optics;
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+/// A user error (bad spec, bad flag combination): exit code 2.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "baker",
+    version,
+    about = "Offline asset baker for physically based skin and cloth"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Check a spec without baking: prints the entries it defines, or every error with file:line.
+    Validate {
+        /// Spec file (YAML).
+        spec: PathBuf,
+    },
+    /// Per-layer optical properties of skin entries (thesis ch. 3): d, η, μa(λ), μs′(λ),
+    /// junction and surface parameters.
+    Optics(optics::OpticsArgs),
+    /// Bake whole specs into `--out` (default `out/`): every product of every entry.
+    Bake(bake::BakeArgs),
+}
+
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Validate { spec } => {
+            let s = load_spec(&spec)?;
+            println!(
+                "{}: ok, {} entries, {} wavelengths ({}–{} nm)",
+                spec.display(),
+                s.entries.len(),
+                s.wavelengths.len(),
+                s.wavelengths.lambda_nm()[0],
+                s.wavelengths.lambda_nm()[s.wavelengths.len() - 1]
+            );
+            for e in &s.entries {
+                println!("  {} (line {})", e.name, e.line);
+            }
+            Ok(())
+        }
+        Command::Optics(a) => optics::run(a),
+        Command::Bake(a) => bake::run(a),
+    }
+}
+
+/// Loads a spec; its errors become a [`UsageError`] listing every problem.
+pub(crate) fn load_spec(path: &std::path::Path) -> anyhow::Result<crate::spec::SkinSpec> {
+    crate::spec::load(path).map_err(|e| UsageError(e.to_string().trim_end().to_string()).into())
+}

@@ -1,0 +1,65 @@
+//! The skin-optics document ([`formats::optics`]) built from model results.
+
+use formats::optics::{
+    self, OpticsDocument, OpticsEntry, OpticsJunction, OpticsLayer, OpticsSurface,
+};
+
+use crate::skin::{ModelKind, SkinOptics};
+use crate::spec::ResolvedEntry;
+
+pub fn model_name(m: ModelKind) -> &'static str {
+    match m {
+        ModelKind::FiveLayer => "five_layer",
+        ModelKind::ThreeLayer => "three_layer",
+    }
+}
+
+pub fn entry(e: &ResolvedEntry, o: &SkinOptics) -> OpticsEntry {
+    let j = o.junction;
+    let s = o.surface;
+    OpticsEntry {
+        name: e.name.clone(),
+        model: model_name(o.model).to_string(),
+        inputs: serde_json::to_value(&e.params).expect("parameters serialise"),
+        layers: o
+            .layers
+            .iter()
+            .map(|l| OpticsLayer {
+                name: l.name.to_string(),
+                d_mm: l.d_mm,
+                eta: l.eta,
+                mua_per_mm: l.mua_per_mm.clone(),
+                musp_per_mm: l.musp_per_mm.clone(),
+            })
+            .collect(),
+        junction: OpticsJunction {
+            z_mean_mm: j.z_mean_mm,
+            amplitude_mm: j.amplitude_mm,
+            omega_x_per_mm: j.omega_x_per_mm,
+            omega_y_per_mm: j.omega_y_per_mm,
+            phi_x_rad: j.phi_x_rad,
+            phi_y_rad: j.phi_y_rad,
+        },
+        surface: OpticsSurface {
+            rz_um: s.rz_um,
+            sebum_mg_per_10cm2_3h: s.sebum_mg_per_10cm2_3h,
+            sebum_film_um: s.sebum_film_um,
+            alpha_sr_rad: s.alpha_sr_rad,
+            psi_s: s.psi_s,
+            beckmann_m: s.beckmann_m,
+            eta: s.eta,
+            f0: s.f0,
+        },
+        intermediate: serde_json::to_value(&o.intermediate).expect("intermediate serialises"),
+    }
+}
+
+pub fn document(source: &str, lambda_nm: &[f64], entries: Vec<OpticsEntry>) -> OpticsDocument {
+    OpticsDocument {
+        format: optics::FORMAT.to_string(),
+        version: optics::VERSION,
+        source: source.to_string(),
+        lambda_nm: lambda_nm.to_vec(),
+        entries,
+    }
+}

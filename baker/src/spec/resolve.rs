@@ -1,0 +1,897 @@
+//! From the raw spec to validated model inputs: defaults merged, sweeps expanded, every value
+//! range-checked with its location, units applied.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use super::error::{SpecError, SpecErrors};
+use super::raw::{OneOrMany, RawCollagen, RawLayerValues, RawParams, RawSpec, Spanned, Token};
+use crate::skin::params::{CollagenAging, SkewNormal};
+use crate::skin::{
+    BodyLocation, Freeze, Gender, HypodermisAbsorption, Layer, MelaninInput, ModelKind,
+    PheomelaninAbsorption, SkinParams, SkinType, SkinTypeMelanin,
+};
+use crate::spectral::WavelengthGrid;
+
+/// Age range the model accepts, years: from young adults (the model's base values are adult,
+/// §3.4) to 90 (Eq. 4's linear decline stays positive: 1 − 6·(0.06 + 0.10) = 0.04).
+pub const AGE_RANGE_YEARS: (f64, f64) = (18.0, 90.0);
+/// Wavelengths the embedded spectra cover, nm.
+pub const LAMBDA_RANGE_NM: (f64, f64) = (380.0, 780.0);
+
+/// A validated skin spec.
+#[derive(Debug, Clone)]
+pub struct SkinSpec {
+    pub file: String,
+    pub wavelengths: WavelengthGrid,
+    pub entries: Vec<ResolvedEntry>,
+}
+
+/// One concrete entry (a listed entry, or one point of a sweep).
+#[derive(Debug, Clone)]
+pub struct ResolvedEntry {
+    pub name: String,
+    /// Line of the entry or sweep in the spec.
+    pub line: u64,
+    pub params: SkinParams,
+}
+
+/// Reads and validates the spec at `path`.
+pub fn load(path: &Path) -> Result<SkinSpec, SpecErrors> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        SpecErrors(vec![SpecError::Io {
+            file: file.clone(),
+            message: e.to_string(),
+        }])
+    })?;
+    load_str(&file, &text)
+}
+
+/// Validates spec text; `file` names it in messages.
+pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
+    let raw: RawSpec = serde_saphyr::from_str(text).map_err(|e| {
+        let (line, column) = e
+            .location()
+            .map(|l| (l.line(), l.column()))
+            .unwrap_or((0, 0));
+        SpecErrors(vec![SpecError::Syntax {
+            file: file.to_string(),
+            line,
+            column,
+            message: describe_syntax_error(text, line, &e.to_string()),
+        }])
+    })?;
+    let mut cx = Ctx {
+        file: file.to_string(),
+        errors: Vec::new(),
+    };
+    let spec = cx.resolve(raw);
+    if cx.errors.is_empty() {
+        Ok(spec)
+    } else {
+        Err(SpecErrors(cx.errors))
+    }
+}
+
+/// serde-saphyr's message without its own "error: line L column C:" prefix and source snippet
+/// (we print file:line:column), prefixed with the field when the message lacks it.
+fn describe_syntax_error(text: &str, line: u64, message: &str) -> String {
+    let mut m = message.lines().next().unwrap_or(message).trim();
+    m = m.strip_prefix("error:").unwrap_or(m).trim();
+    if let Some(rest) = m.strip_prefix("line ") {
+        if let Some((_, after)) = rest.split_once(": ") {
+            m = after;
+        }
+    }
+    if m.contains("field") {
+        return m.to_string();
+    }
+    // Name the key on the offending line ("age: thirty" → "age: invalid type …").
+    let key = text
+        .lines()
+        .nth(line.saturating_sub(1) as usize)
+        .and_then(|l| l.split_once(':'))
+        .map(|(k, _)| k.trim().trim_start_matches("- ").trim())
+        .filter(|k| !k.is_empty() && !k.contains(' '));
+    match key {
+        Some(k) => format!("{k}: {m}"),
+        None => m.to_string(),
+    }
+}
+
+struct Ctx {
+    file: String,
+    errors: Vec<SpecError>,
+}
+
+fn loc<T>(s: &Spanned<T>) -> (u64, u64) {
+    (s.referenced.line(), s.referenced.column())
+}
+
+/// One point of a sweep: each sweepable field with the location it came from.
+#[derive(Clone, Default)]
+struct Point {
+    age: Option<Spanned<f64>>,
+    gender: Option<Spanned<String>>,
+    skin_type: Option<Spanned<Token>>,
+    melanosome_fraction: Option<Spanned<f64>>,
+    location: Option<Spanned<String>>,
+    xi: Option<Spanned<f64>>,
+    model: Option<Spanned<String>>,
+}
+
+impl Ctx {
+    fn invalid(&mut self, at: (u64, u64), field: &str, message: impl Into<String>) {
+        self.errors.push(SpecError::Invalid {
+            file: self.file.clone(),
+            line: at.0,
+            column: at.1,
+            field: field.to_string(),
+            message: message.into(),
+        });
+    }
+
+    fn out_of_range(&mut self, at: (u64, u64), field: &str, value: String, allowed: String) {
+        self.errors.push(SpecError::OutOfRange {
+            file: self.file.clone(),
+            line: at.0,
+            column: at.1,
+            field: field.to_string(),
+            value,
+            allowed,
+        });
+    }
+
+    /// `v` within [lo, hi] (`open_lo`: lo excluded); records an error otherwise.
+    fn in_range(
+        &mut self,
+        field: &str,
+        v: &Spanned<f64>,
+        lo: f64,
+        hi: f64,
+        open_lo: bool,
+    ) -> Option<f64> {
+        let x = v.value;
+        let ok = x.is_finite() && (if open_lo { x > lo } else { x >= lo }) && x <= hi;
+        if ok {
+            Some(x)
+        } else {
+            let allowed = format!("{}{lo}, {hi}]", if open_lo { "(" } else { "[" });
+            self.out_of_range(loc(v), field, format!("{x}"), allowed);
+            None
+        }
+    }
+
+    fn opt_range(
+        &mut self,
+        field: &str,
+        v: &Option<Spanned<f64>>,
+        lo: f64,
+        hi: f64,
+        open_lo: bool,
+        default: f64,
+    ) -> f64 {
+        match v {
+            Some(s) => self.in_range(field, s, lo, hi, open_lo).unwrap_or(default),
+            None => default,
+        }
+    }
+
+    fn choice<T: Copy>(
+        &mut self,
+        field: &str,
+        v: &Spanned<String>,
+        options: &[(&str, T)],
+    ) -> Option<T> {
+        if let Some((_, t)) = options.iter().find(|(k, _)| *k == v.value) {
+            return Some(*t);
+        }
+        let allowed: Vec<&str> = options.iter().map(|o| o.0).collect();
+        self.out_of_range(
+            loc(v),
+            field,
+            format!("{:?}", v.value),
+            format!("one of {}", allowed.join(", ")),
+        );
+        None
+    }
+
+    fn resolve(&mut self, raw: RawSpec) -> SkinSpec {
+        if let Some(v) = &raw.version {
+            if v.value != 1 {
+                self.out_of_range(loc(v), "version", v.value.to_string(), "1".into());
+            }
+        }
+        let wavelengths = self.wavelengths(&raw);
+        let defaults = raw
+            .defaults
+            .as_ref()
+            .map(|d| d.value.clone())
+            .unwrap_or_default();
+        if let Some(d) = &raw.defaults {
+            if let Some(n) = &d.value.name {
+                self.invalid(
+                    loc(n),
+                    "defaults.name",
+                    "names belong to entries and sweeps, not defaults",
+                );
+            }
+            self.reject_lists(&d.value, "defaults");
+        }
+        let mut entries = Vec::new();
+        for e in &raw.entries {
+            self.reject_lists(&e.value, "entries");
+            let merged = merge(&defaults, &e.value);
+            let Some(name) = merged.name.clone() else {
+                self.invalid(loc(e), "name", "every entry needs a name");
+                continue;
+            };
+            let point = single_point(&merged);
+            if let Some(params) = self.params(&merged, &point, loc(e)) {
+                entries.push(ResolvedEntry {
+                    name: name.value.clone(),
+                    line: loc(e).0,
+                    params,
+                });
+            }
+        }
+        for s in &raw.sweeps {
+            let merged = merge(&defaults, &s.value);
+            let Some(template) = merged.name.clone() else {
+                self.invalid(
+                    loc(s),
+                    "name",
+                    "every sweep needs a name template, e.g. \"fitz_{skin_type}_{age}\"",
+                );
+                continue;
+            };
+            let points = expand(&merged);
+            self.check_template(&template, &merged);
+            for point in points {
+                if let Some(params) = self.params(&merged, &point, loc(s)) {
+                    entries.push(ResolvedEntry {
+                        name: fill_template(&template.value, &point),
+                        line: loc(s).0,
+                        params,
+                    });
+                }
+            }
+        }
+        if raw.entries.is_empty() && raw.sweeps.is_empty() {
+            self.invalid((1, 1), "entries", "the spec has no entries and no sweeps");
+        }
+        let mut seen: HashMap<&str, u64> = HashMap::new();
+        let mut dups = Vec::new();
+        for e in &entries {
+            if let Some(first) = seen.insert(&e.name, e.line) {
+                dups.push((
+                    (e.line, 1),
+                    format!("{:?} already defined on line {first}", e.name),
+                ));
+            }
+        }
+        for (at, m) in dups {
+            self.invalid(at, "name", m);
+        }
+        SkinSpec {
+            file: self.file.clone(),
+            wavelengths,
+            entries,
+        }
+    }
+
+    fn wavelengths(&mut self, raw: &RawSpec) -> WavelengthGrid {
+        let Some(w) = &raw.wavelengths else {
+            return WavelengthGrid::thesis_default();
+        };
+        let (lo, hi) = LAMBDA_RANGE_NM;
+        let v = &w.value;
+        if let Some(list) = &v.list_nm {
+            if v.start_nm.is_some() || v.stop_nm.is_some() || v.step_nm.is_some() {
+                self.invalid(
+                    loc(w),
+                    "wavelengths",
+                    "give either list_nm or start_nm/stop_nm/step_nm, not both",
+                );
+            }
+            let mut out = Vec::new();
+            for x in &list.value {
+                if let Some(x) = self.in_range("wavelengths.list_nm", x, lo, hi, false) {
+                    if out.last().is_some_and(|&p| x <= p) {
+                        self.invalid(
+                            loc(list),
+                            "wavelengths.list_nm",
+                            "wavelengths must strictly increase",
+                        );
+                    }
+                    out.push(x);
+                }
+            }
+            if out.is_empty() {
+                self.invalid(loc(list), "wavelengths.list_nm", "empty list");
+                return WavelengthGrid::thesis_default();
+            }
+            return WavelengthGrid::from_list(out);
+        }
+        let start = self.opt_range("wavelengths.start_nm", &v.start_nm, lo, hi, false, 400.0);
+        let stop = self.opt_range("wavelengths.stop_nm", &v.stop_nm, lo, hi, false, 700.0);
+        let step = self.opt_range("wavelengths.step_nm", &v.step_nm, 0.0, hi - lo, true, 10.0);
+        if stop < start {
+            self.invalid(
+                loc(w),
+                "wavelengths",
+                format!("stop_nm {stop} is below start_nm {start}"),
+            );
+            return WavelengthGrid::thesis_default();
+        }
+        WavelengthGrid::uniform(start, stop, step)
+    }
+
+    fn reject_lists(&mut self, p: &RawParams, block: &str) {
+        let lists = [
+            ("age", is_many(&p.age)),
+            ("gender", is_many(&p.gender)),
+            ("skin_type", is_many(&p.skin_type)),
+            ("melanosome_fraction", is_many(&p.melanosome_fraction)),
+            ("location", is_many(&p.location)),
+            ("xi", is_many(&p.xi)),
+            ("model", is_many(&p.model)),
+        ];
+        for (field, at) in lists {
+            if let Some(at) = at {
+                self.invalid(
+                    at,
+                    field,
+                    format!("a list of values is only allowed in `sweeps`, not in `{block}`"),
+                );
+            }
+        }
+    }
+
+    fn check_template(&mut self, template: &Spanned<String>, p: &RawParams) {
+        let swept = [
+            ("age", count(&p.age)),
+            ("gender", count(&p.gender)),
+            ("skin_type", count(&p.skin_type)),
+            ("melanosome_fraction", count(&p.melanosome_fraction)),
+            ("location", count(&p.location)),
+            ("xi", count(&p.xi)),
+            ("model", count(&p.model)),
+        ];
+        for (field, n) in swept {
+            if n > 1 && !template.value.contains(&format!("{{{field}}}")) {
+                self.invalid(
+                    loc(template),
+                    "name",
+                    format!("the sweep varies {field}, so its name template needs {{{field}}} to keep entry names unique"),
+                );
+            }
+        }
+    }
+
+    /// Builds the model inputs of one point; records errors and returns None if any.
+    fn params(&mut self, p: &RawParams, pt: &Point, at: (u64, u64)) -> Option<SkinParams> {
+        let before = self.errors.len();
+        let age = match &pt.age {
+            Some(a) => self.in_range("age", a, AGE_RANGE_YEARS.0, AGE_RANGE_YEARS.1, false),
+            None => {
+                self.invalid(at, "age", "missing (years, 18–90)");
+                None
+            }
+        };
+        let gender_opts = [("female", Gender::Female), ("male", Gender::Male)];
+        let gender = match &pt.gender {
+            Some(g) => self.choice("gender", g, &gender_opts),
+            None => {
+                self.invalid(at, "gender", "missing (female or male)");
+                None
+            }
+        };
+        let loc_opts = [
+            ("face", BodyLocation::Face),
+            ("forearm", BodyLocation::Forearm),
+            ("back_of_hand", BodyLocation::BackOfHand),
+            ("palm", BodyLocation::Palm),
+        ];
+        let location = match &pt.location {
+            Some(l) => self.choice("location", l, &loc_opts),
+            None => {
+                self.invalid(
+                    at,
+                    "location",
+                    "missing (face, forearm, back_of_hand or palm)",
+                );
+                None
+            }
+        };
+        let xi = match &pt.xi {
+            Some(x) => self.in_range("xi", x, 0.0, 1.0, false),
+            None => {
+                self.invalid(at, "xi", "missing (exposure to external aging agents, 0–1)");
+                None
+            }
+        };
+        let melanin = match (&pt.skin_type, &pt.melanosome_fraction) {
+            (Some(t), None) => self.skin_type(t).map(MelaninInput::SkinType),
+            (None, Some(f)) => self
+                .in_range("melanosome_fraction", f, 0.0, 0.5, false)
+                .map(MelaninInput::MelanosomeFraction),
+            (Some(t), Some(_)) => {
+                self.invalid(
+                    loc(t),
+                    "skin_type",
+                    "give skin_type or melanosome_fraction, not both",
+                );
+                None
+            }
+            (None, None) => {
+                self.invalid(
+                    at,
+                    "skin_type",
+                    "missing: give skin_type (I–VI) or melanosome_fraction (0–0.5)",
+                );
+                None
+            }
+        };
+        let model = match &pt.model {
+            Some(m) => self.choice(
+                "model",
+                m,
+                &[
+                    ("five_layer", ModelKind::FiveLayer),
+                    ("three_layer", ModelKind::ThreeLayer),
+                ],
+            ),
+            None => Some(ModelKind::FiveLayer),
+        };
+        let (Some(age), Some(gender), Some(location), Some(xi), Some(melanin), Some(model)) =
+            (age, gender, location, xi, melanin, model)
+        else {
+            return None;
+        };
+        let mut s = SkinParams::new(age, gender, location, melanin, xi);
+        s.model = model;
+        self.overrides(p, &mut s);
+        (self.errors.len() == before).then_some(s)
+    }
+
+    fn skin_type(&mut self, t: &Spanned<Token>) -> Option<SkinType> {
+        let found = match &t.value {
+            Token::Text(s) => SkinType::ALL
+                .iter()
+                .find(|k| k.roman() == s.as_str())
+                .copied(),
+            Token::Number(x) if x.fract() == 0.0 && (1.0..=6.0).contains(x) => {
+                Some(SkinType::ALL[*x as usize - 1])
+            }
+            Token::Number(_) => None,
+        };
+        if found.is_none() {
+            self.out_of_range(
+                loc(t),
+                "skin_type",
+                t.value.to_string(),
+                "one of I, II, III, IV, V, VI (or 1–6)".into(),
+            );
+        }
+        found
+    }
+
+    /// Biophysical overrides; ranges cite the table that motivates them.
+    fn overrides(&mut self, p: &RawParams, s: &mut SkinParams) {
+        if let Some(v) = &p.skin_type_melanin {
+            let opts = [
+                ("caption", SkinTypeMelanin::Caption),
+                ("figure40", SkinTypeMelanin::Figure40),
+            ];
+            if let Some(m) = self.choice("skin_type_melanin", v, &opts) {
+                s.skin_type_melanin = m;
+            }
+        }
+        // Table 2: ϑHb in [0.1, 20] % in the dermis.
+        s.blood_fraction_pd = self.opt_range(
+            "blood_fraction_pd",
+            &p.blood_fraction_pd,
+            0.001,
+            0.2,
+            false,
+            s.blood_fraction_pd,
+        );
+        s.blood_fraction_rd = self.opt_range(
+            "blood_fraction_rd",
+            &p.blood_fraction_rd,
+            0.001,
+            0.2,
+            false,
+            s.blood_fraction_rd,
+        );
+        s.blood_fraction_hd = self.opt_range(
+            "blood_fraction_hd",
+            &p.blood_fraction_hd,
+            0.0,
+            0.2,
+            false,
+            s.blood_fraction_hd,
+        );
+        s.oxygen_saturation = self.opt_range(
+            "oxygen_saturation",
+            &p.oxygen_saturation,
+            0.0,
+            1.0,
+            false,
+            s.oxygen_saturation,
+        );
+        s.hemoglobin_g_per_l = self.opt_range(
+            "hemoglobin_g_per_l",
+            &p.hemoglobin_g_per_l,
+            0.0,
+            300.0,
+            true,
+            s.hemoglobin_g_per_l,
+        );
+        // Table 2: bilirubin [0.05, 3] g/L; 0 allowed to switch it off.
+        s.bilirubin_g_per_l = self.opt_range(
+            "bilirubin_g_per_l",
+            &p.bilirubin_g_per_l,
+            0.0,
+            3.0,
+            false,
+            s.bilirubin_g_per_l,
+        );
+        s.carotene_blood_g_per_l = self.opt_range(
+            "carotene_blood_g_per_l",
+            &p.carotene_blood_g_per_l,
+            0.0,
+            0.01,
+            false,
+            s.carotene_blood_g_per_l,
+        );
+        s.carotene_epidermis_g_per_l = self.opt_range(
+            "carotene_epidermis_g_per_l",
+            &p.carotene_epidermis_g_per_l,
+            0.0,
+            0.01,
+            false,
+            s.carotene_epidermis_g_per_l,
+        );
+        s.eumelanin_g_per_l = self.opt_range(
+            "eumelanin_g_per_l",
+            &p.eumelanin_g_per_l,
+            0.0,
+            200.0,
+            false,
+            s.eumelanin_g_per_l,
+        );
+        s.pheomelanin_g_per_l = self.opt_range(
+            "pheomelanin_g_per_l",
+            &p.pheomelanin_g_per_l,
+            0.0,
+            200.0,
+            false,
+            s.pheomelanin_g_per_l,
+        );
+        if let Some(v) = &p.pheomelanin_absorption {
+            let opts = [
+                ("thesis_fit", PheomelaninAbsorption::ThesisFit),
+                ("measured", PheomelaninAbsorption::Measured),
+            ];
+            if let Some(m) = self.choice("pheomelanin_absorption", v, &opts) {
+                s.pheomelanin_absorption = m;
+            }
+        }
+        if let Some(v) = &p.hypodermis_absorption {
+            let opts = [
+                ("blood", HypodermisAbsorption::Blood),
+                ("water_only", HypodermisAbsorption::WaterOnly),
+            ];
+            if let Some(m) = self.choice("hypodermis_absorption", v, &opts) {
+                s.hypodermis_absorption = m;
+            }
+        }
+        self.layer_values(
+            "water_fraction",
+            &p.water_fraction,
+            &mut s.water_fraction,
+            (0.0, 0.95, false),
+        );
+        self.layer_values(
+            "thickness_mm",
+            &p.thickness_mm,
+            &mut s.thickness_at_30_mm,
+            (0.0, 100.0, true),
+        );
+        self.layer_values(
+            "atrophy_per_decade",
+            &p.atrophy_per_decade,
+            &mut s.atrophy_per_decade,
+            (0.0, 0.5, false),
+        );
+        s.dej_amplitude_at_30_um = self.opt_range(
+            "dej_amplitude_um",
+            &p.dej_amplitude_um,
+            0.0,
+            200.0,
+            false,
+            s.dej_amplitude_at_30_um,
+        );
+        s.dej_period_um = self.opt_range(
+            "dej_period_um",
+            &p.dej_period_um,
+            10.0,
+            2000.0,
+            false,
+            s.dej_period_um,
+        );
+        if let Some(ph) = &p.dej_phase_rad {
+            if ph.value.iter().all(|x| x.is_finite()) {
+                s.dej_phase_rad = ph.value;
+            } else {
+                self.out_of_range(
+                    loc(ph),
+                    "dej_phase_rad",
+                    format!("{:?}", ph.value),
+                    "two finite numbers".into(),
+                );
+            }
+        }
+        if let Some(v) = &p.rz_um {
+            s.rz_um = self.in_range("rz_um", v, 0.0, 1000.0, true);
+        }
+        if let Some(v) = &p.sebum_mg {
+            s.sebum_mg = self.in_range("sebum_mg", v, 0.0, 10.0, false);
+        }
+        s.sebum_volume_factor = self.opt_range(
+            "sebum_volume_factor",
+            &p.sebum_volume_factor,
+            0.0,
+            10.0,
+            true,
+            s.sebum_volume_factor,
+        );
+        if let Some(c) = &p.collagen_pd {
+            s.collagen_pd = self.collagen("collagen_pd", &c.value);
+        }
+        if let Some(c) = &p.collagen_rd {
+            s.collagen_rd = self.collagen("collagen_rd", &c.value);
+        }
+        if let Some(list) = &p.freeze {
+            s.freeze = self.freeze(list);
+        }
+    }
+
+    fn layer_values(
+        &mut self,
+        field: &str,
+        raw: &Option<Spanned<RawLayerValues>>,
+        out: &mut [f64; 5],
+        range: (f64, f64, bool),
+    ) {
+        let Some(raw) = raw else { return };
+        for (layer, v) in Layer::ALL.iter().zip(raw.value.as_array()) {
+            if let Some(v) = v {
+                let name = format!("{field}.{}", layer.key());
+                if let Some(x) = self.in_range(&name, v, range.0, range.1, range.2) {
+                    out[layer.index()] = x;
+                }
+            }
+        }
+    }
+
+    fn collagen(&mut self, field: &str, c: &RawCollagen) -> CollagenAging {
+        let mut one = |age: &str, s: &Spanned<super::raw::RawSkewNormal>| SkewNormal {
+            location_um: self
+                .in_range(
+                    &format!("{field}.{age}.location_um"),
+                    &s.value.location_um,
+                    0.5,
+                    40.0,
+                    false,
+                )
+                .unwrap_or(1.0),
+            scale_um: self
+                .in_range(
+                    &format!("{field}.{age}.scale_um"),
+                    &s.value.scale_um,
+                    0.05,
+                    40.0,
+                    false,
+                )
+                .unwrap_or(1.0),
+            shape: self
+                .in_range(
+                    &format!("{field}.{age}.shape"),
+                    &s.value.shape,
+                    -20.0,
+                    20.0,
+                    false,
+                )
+                .unwrap_or(0.0),
+        };
+        CollagenAging {
+            at_30: one("at_30", &c.at_30),
+            at_80: one("at_80", &c.at_80),
+        }
+    }
+
+    fn freeze(&mut self, list: &Spanned<Vec<Spanned<String>>>) -> Freeze {
+        let mut f = Freeze::default();
+        for item in &list.value {
+            match item.value.as_str() {
+                "thickness" => f.thickness = true,
+                "melanin" => f.melanin = true,
+                "hemoglobin" => f.hemoglobin = true,
+                "surface" => f.surface = true,
+                "collagen" => f.collagen = true,
+                "junction" => f.junction = true,
+                other => self.out_of_range(
+                    loc(item),
+                    "freeze",
+                    format!("{other:?}"),
+                    "thickness, melanin, hemoglobin, surface, collagen, junction".into(),
+                ),
+            }
+        }
+        f
+    }
+}
+
+fn is_many<T>(v: &Option<Spanned<OneOrMany<T>>>) -> Option<(u64, u64)> {
+    match v {
+        Some(s) if matches!(s.value, OneOrMany::Many(_)) => Some(loc(s)),
+        _ => None,
+    }
+}
+
+fn count<T>(v: &Option<Spanned<OneOrMany<T>>>) -> usize {
+    match v {
+        Some(Spanned {
+            value: OneOrMany::Many(m),
+            ..
+        }) => m.len(),
+        _ => 1,
+    }
+}
+
+/// The values of a sweepable field, each with its own location.
+fn values<T: Clone>(v: &Option<Spanned<OneOrMany<T>>>) -> Vec<Option<Spanned<T>>> {
+    match v {
+        None => vec![None],
+        Some(s) => match &s.value {
+            OneOrMany::One(x) => vec![Some(Spanned::new(x.clone(), s.referenced, s.defined))],
+            OneOrMany::Many(list) if list.is_empty() => vec![None],
+            OneOrMany::Many(list) => list.iter().cloned().map(Some).collect(),
+        },
+    }
+}
+
+fn single_point(p: &RawParams) -> Point {
+    expand(p).into_iter().next().unwrap_or_default()
+}
+
+/// Cartesian product of the sweepable fields, in the order they are declared.
+fn expand(p: &RawParams) -> Vec<Point> {
+    let mut points = vec![Point::default()];
+    macro_rules! product {
+        ($field:ident) => {{
+            let vals = values(&p.$field);
+            let mut next = Vec::with_capacity(points.len() * vals.len());
+            for pt in &points {
+                for v in &vals {
+                    let mut q = pt.clone();
+                    q.$field = v.clone();
+                    next.push(q);
+                }
+            }
+            points = next;
+        }};
+    }
+    product!(age);
+    product!(gender);
+    product!(skin_type);
+    product!(melanosome_fraction);
+    product!(location);
+    product!(xi);
+    product!(model);
+    points
+}
+
+fn fill_template(template: &str, pt: &Point) -> String {
+    let mut name = template.to_string();
+    let mut put = |key: &str, v: Option<String>| {
+        if let Some(v) = v {
+            name = name.replace(&format!("{{{key}}}"), &v);
+        }
+    };
+    put("age", pt.age.as_ref().map(|v| v.value.to_string()));
+    put("gender", pt.gender.as_ref().map(|v| v.value.clone()));
+    put(
+        "skin_type",
+        pt.skin_type.as_ref().map(|v| v.value.to_string()),
+    );
+    put(
+        "melanosome_fraction",
+        pt.melanosome_fraction.as_ref().map(|v| v.value.to_string()),
+    );
+    put("location", pt.location.as_ref().map(|v| v.value.clone()));
+    put("xi", pt.xi.as_ref().map(|v| v.value.to_string()));
+    put("model", pt.model.as_ref().map(|v| v.value.clone()));
+    name
+}
+
+/// `over` on top of `base`, field by field (per-layer maps merge per layer).
+fn merge(base: &RawParams, over: &RawParams) -> RawParams {
+    macro_rules! pick {
+        ($($f:ident),*) => {
+            RawParams { $($f: over.$f.clone().or_else(|| base.$f.clone()),)* ..merge_layers(base, over) }
+        };
+    }
+    pick!(
+        name,
+        age,
+        gender,
+        skin_type,
+        melanosome_fraction,
+        location,
+        xi,
+        model,
+        skin_type_melanin,
+        blood_fraction_pd,
+        blood_fraction_rd,
+        blood_fraction_hd,
+        oxygen_saturation,
+        hemoglobin_g_per_l,
+        bilirubin_g_per_l,
+        carotene_blood_g_per_l,
+        carotene_epidermis_g_per_l,
+        eumelanin_g_per_l,
+        pheomelanin_g_per_l,
+        pheomelanin_absorption,
+        hypodermis_absorption,
+        dej_amplitude_um,
+        dej_period_um,
+        dej_phase_rad,
+        rz_um,
+        sebum_mg,
+        sebum_volume_factor,
+        collagen_pd,
+        collagen_rd,
+        freeze
+    )
+}
+
+fn merge_layers(base: &RawParams, over: &RawParams) -> RawParams {
+    let m = |b: &Option<Spanned<RawLayerValues>>, o: &Option<Spanned<RawLayerValues>>| match (b, o)
+    {
+        (Some(b), Some(o)) => {
+            let (bv, ov) = (&b.value, &o.value);
+            let v = RawLayerValues {
+                stratum_corneum: ov
+                    .stratum_corneum
+                    .clone()
+                    .or_else(|| bv.stratum_corneum.clone()),
+                living_epidermis: ov
+                    .living_epidermis
+                    .clone()
+                    .or_else(|| bv.living_epidermis.clone()),
+                papillary_dermis: ov
+                    .papillary_dermis
+                    .clone()
+                    .or_else(|| bv.papillary_dermis.clone()),
+                reticular_dermis: ov
+                    .reticular_dermis
+                    .clone()
+                    .or_else(|| bv.reticular_dermis.clone()),
+                hypodermis: ov.hypodermis.clone().or_else(|| bv.hypodermis.clone()),
+            };
+            Some(Spanned::new(v, o.referenced, o.defined))
+        }
+        (b, o) => o.clone().or_else(|| b.clone()),
+    };
+    RawParams {
+        water_fraction: m(&base.water_fraction, &over.water_fraction),
+        thickness_mm: m(&base.thickness_mm, &over.thickness_mm),
+        atrophy_per_decade: m(&base.atrophy_per_decade, &over.atrophy_per_decade),
+        ..RawParams::default()
+    }
+}

@@ -1,0 +1,10 @@
+//! On-disk formats of the baker and light readers for renderers and tools.
+//!
+//! This crate has no heavy dependencies (no HDF5, no rayon, no physics): a renderer links it
+//! to read what the baker writes. Each format documents its layout in its module.
+
+pub mod optics;
+
+pub use optics::{
+    OpticsDocument, OpticsEntry, OpticsError, OpticsJunction, OpticsLayer, OpticsSurface,
+};
