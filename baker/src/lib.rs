@@ -9,3 +9,5 @@ pub mod output;
 pub mod skin;
 pub mod spec;
 pub mod spectral;
+pub mod stats;
+pub mod transport;

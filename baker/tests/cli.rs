@@ -252,3 +252,148 @@ fn walk(p: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+fn json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+#[test]
+fn mc_json_has_every_documented_key() {
+    let v = json(&baker(&[
+        "mc",
+        "tests/stacks/mcml_benchmark.json",
+        "--photons",
+        "20000",
+        "--seed",
+        "3",
+        "--json",
+    ]));
+    for key in [
+        "rsp",
+        "rd",
+        "rd_unscattered",
+        "tt",
+        "absorbed",
+        "r_mm",
+        "rd_r_per_mm2",
+        "rsp_se",
+        "rd_se",
+        "rd_unscattered_se",
+        "tt_se",
+        "absorbed_se",
+        "rd_r_per_mm2_se",
+        "photons",
+        "threads",
+        "photons_per_s",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    assert_eq!(v["photons"], 20000);
+    assert_eq!(v["r_mm"].as_array().unwrap().len(), 100);
+    // Same seed, different thread count: identical numbers.
+    let w = json(&baker(&[
+        "mc",
+        "tests/stacks/mcml_benchmark.json",
+        "--photons",
+        "20000",
+        "--seed",
+        "3",
+        "--threads",
+        "1",
+        "--json",
+    ]));
+    assert_eq!(v["rd"], w["rd"]);
+    assert_eq!(v["rd_r_per_mm2"], w["rd_r_per_mm2"]);
+}
+
+#[test]
+fn mc_takes_a_skin_spec_entry_and_a_wavelength() {
+    let v = json(&baker(&[
+        "mc",
+        "--spec",
+        "specs/fitzpatrick.yaml",
+        "--entry",
+        "fig35_female_type2_age30",
+        "--lambda-nm",
+        "550",
+        "--photons",
+        "5000",
+        "--json",
+    ]));
+    assert_eq!(v["absorbed"].as_array().unwrap().len(), 5);
+    assert!((v["rsp"].as_f64().unwrap() - ((1.53f64 - 1.0) / 2.53).powi(2)).abs() < 1e-12);
+}
+
+#[test]
+fn mc_rejects_a_bad_stack_with_the_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("bad.json");
+    std::fs::write(&p, r#"{"n_above": 1, "n_below": 1, "layers": [{"d_mm": 0.1, "eta": 1.4, "mua_per_mm": -1, "mus_per_mm": 1, "g": 0}]}"#).unwrap();
+    let o = baker(&["mc", p.to_str().unwrap(), "--photons", "10"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("mua_per_mm = -1"), "{}", stderr(&o));
+}
+
+/// `--mci-in` runs every run of an MCML input file and writes MCML's `.mco` format; the file has
+/// MCML's sections in CONV's order with the right number of values, and is self-consistent.
+#[test]
+fn mc_reads_mci_and_writes_mco() {
+    let dir = tempfile::tempdir().unwrap();
+    let mci = dir.path().join("two_runs.mci");
+    std::fs::copy(repo().join("tests/stacks/two_runs.mci"), &mci).unwrap();
+    let o = baker(&["mc", "--mci-in", mci.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(dir.path().join("bench.mco")).unwrap();
+    assert!(text.starts_with("A1 \t# Version number of the file format."));
+    // Values of each section: the data lines after its keyword, up to the next keyword.
+    let keys = [
+        "InParm", "RAT", "A_l", "A_z", "Rd_r", "Rd_a", "Tt_r", "Tt_a", "A_rz", "Rd_ra", "Tt_ra",
+    ];
+    let mut sections: Vec<(String, Vec<f64>)> = Vec::new();
+    for line in text.lines() {
+        let first = line.split_whitespace().next().unwrap_or("");
+        if keys.contains(&first) {
+            sections.push((first.to_string(), Vec::new()));
+        } else if !line.starts_with('#') && !line.trim().is_empty() {
+            if let Some(s) = sections.last_mut() {
+                let data = line.split('#').next().unwrap();
+                s.1.extend(
+                    data.split_whitespace()
+                        .filter_map(|t| t.parse::<f64>().ok()),
+                );
+            }
+        }
+    }
+    let names: Vec<&str> = sections.iter().map(|s| s.0.as_str()).collect();
+    assert_eq!(names, keys);
+    let get = |k: &str| &sections.iter().find(|s| s.0 == k).unwrap().1;
+    let (nz, nr, na) = (10usize, 50usize, 10usize);
+    assert_eq!(get("A_z").len(), nz);
+    assert_eq!(get("Rd_r").len(), nr);
+    assert_eq!(get("Rd_a").len(), na);
+    assert_eq!(get("A_rz").len(), nr * nz);
+    assert_eq!(get("Rd_ra").len(), nr * na);
+    assert_eq!(get("Tt_ra").len(), nr * na);
+    let rat = get("RAT");
+    assert!(
+        (rat.iter().sum::<f64>() - 1.0).abs() < 1e-5,
+        "Rsp + Rd + A + Tt = {}",
+        rat.iter().sum::<f64>()
+    );
+    // Σ Rd_r·2πr·dr over the grid (the last bin holds the overflow) equals Rd.
+    let dr = 0.002;
+    let rd: f64 = get("Rd_r")
+        .iter()
+        .enumerate()
+        .map(|(i, x)| x * 2.0 * std::f64::consts::PI * dr * dr * (i as f64 + 0.5))
+        .sum();
+    assert!(
+        (rd - rat[1]).abs() < 2e-4 * rat[1].max(1e-3) + 1e-5,
+        "∫Rd_r = {rd}, Rd = {}",
+        rat[1]
+    );
+    // Benchmark slab, 20,000 photons: Rd and Tt near van de Hulst's values.
+    assert!((rat[1] - 0.09739).abs() < 0.01 && (rat[3] - 0.66096).abs() < 0.01);
+    assert!(dir.path().join("two.mco").exists());
+}

@@ -1,6 +1,8 @@
 //! The commands behind the `baker` binary. `main.rs` only parses; everything runs from here.
 
 mod bake;
+mod bench;
+mod mc;
 mod optics;
 
 use std::path::PathBuf;
@@ -33,6 +35,12 @@ pub enum Command {
     /// Per-layer optical properties of skin entries (thesis ch. 3): d, η, μa(λ), μs′(λ),
     /// junction and surface parameters.
     Optics(optics::OpticsArgs),
+    /// Layered Monte Carlo photon transport (MCML class): Rd, Tt, absorption, Rd(r) with
+    /// standard errors, for a stack file, an MCML .mci file, or a skin spec entry.
+    Mc(mc::McArgs),
+    /// Transport throughput (photons/s, scattering events/s) on the thesis's reference skin
+    /// stack, for each thread count.
+    Bench(bench::BenchArgs),
     /// Bake whole specs into `--out` (default `out/`): every product of every entry.
     Bake(bake::BakeArgs),
 }
@@ -56,6 +64,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Optics(a) => optics::run(a),
         Command::Bake(a) => bake::run(a),
+        Command::Mc(a) => mc::run(a),
+        Command::Bench(a) => bench::run(a),
     }
 }
 

@@ -1,0 +1,152 @@
+//! `baker mc`: layered Monte Carlo transport of a stack file, an MCML input file, or a skin
+//! spec entry at one wavelength.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use super::{load_spec, UsageError};
+use crate::output::atomic;
+use crate::transport::{self, mcml, McOptions, McResult, Stack};
+
+#[derive(Debug, Args)]
+pub struct McArgs {
+    /// Stack file (JSON): {"n_above", "n_below", "layers": [{"name", "d_mm" (number or "inf"),
+    /// "eta", "mua_per_mm", "mus_per_mm", "g"}], "grid": {"dr_mm", "nr"}, "junction"?}.
+    #[arg(conflicts_with_all = ["mci_in", "spec"])]
+    pub stack: Option<PathBuf>,
+    /// Read an MCML input file instead (cm units; every run in it is simulated).
+    #[arg(long, value_name = "FILE.mci", conflicts_with = "spec")]
+    pub mci_in: Option<PathBuf>,
+    /// Write MCML's output format (.mco). With --mci-in and no --mco, each run's own output
+    /// file name is used.
+    #[arg(long, value_name = "FILE")]
+    pub mco: Option<PathBuf>,
+    /// Take the stack from a skin spec entry (with --entry and --lambda-nm).
+    #[arg(long, value_name = "SPEC", requires_all = ["entry", "lambda_nm"])]
+    pub spec: Option<PathBuf>,
+    #[arg(long, requires = "spec")]
+    pub entry: Option<String>,
+    /// Wavelength of the skin entry, nm (on the spec's grid).
+    #[arg(long, value_name = "NM", requires = "spec")]
+    pub lambda_nm: Option<f64>,
+    /// Photon packets to trace.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub photons: u64,
+    /// Seed: the same input and seed give bit-identical output for any thread count.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print one JSON object instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: McArgs) -> anyhow::Result<()> {
+    let mut o = McOptions::new(a.photons, a.seed);
+    o.threads = a.threads;
+    o.progress = !a.json;
+    if a.photons == 0 {
+        return Err(UsageError("--photons must be at least 1".into()).into());
+    }
+    if let Some(path) = &a.mci_in {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let runs =
+            mcml::parse_mci(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
+        for (k, run) in runs.iter().enumerate() {
+            let mut ok = o.clone();
+            if a.photons == 1_000_000 {
+                ok.photons = run.photons; // the file's own photon count unless --photons is given
+            }
+            let (r, grid) = mcml::simulate_grid(run, &ok)?;
+            report(&r, a.json)?;
+            let out = match (&a.mco, runs.len()) {
+                (Some(p), 1) => p.clone(),
+                (Some(p), _) => p.with_extension(format!("{k}.mco")),
+                (None, _) => path
+                    .parent()
+                    .unwrap_or(std::path::Path::new("."))
+                    .join(&run.output_file),
+            };
+            atomic::write(&out, mcml::write_mco(run, &r, &grid).as_bytes())
+                .with_context(|| format!("writing {}", out.display()))?;
+            eprintln!("wrote {}", out.display());
+        }
+        return Ok(());
+    }
+    let stack = if let Some(spec) = &a.spec {
+        let s = load_spec(spec)?;
+        let name = a.entry.as_deref().unwrap();
+        let entries = super::optics::evaluate_entries(&s, Some(name))?;
+        let lambda = a.lambda_nm.unwrap();
+        let lam = s.wavelengths.lambda_nm();
+        let i = lam
+            .iter()
+            .position(|&l| (l - lambda).abs() < 1e-9)
+            .ok_or_else(|| {
+                UsageError(format!(
+                    "--lambda-nm {lambda}: not on the spec's wavelength grid ({}–{} nm)",
+                    lam[0],
+                    lam[lam.len() - 1]
+                ))
+            })?;
+        transport::stack::from_skin(&entries[0], i)
+    } else if let Some(path) = &a.stack {
+        read_stack(path)?
+    } else {
+        return Err(UsageError(
+            "give a STACK.json, --mci-in FILE.mci, or --spec SPEC --entry NAME --lambda-nm NM"
+                .into(),
+        )
+        .into());
+    };
+    if let Some(out) = &a.mco {
+        let run = mcml::McmlRun::from_stack(&stack, o.photons);
+        let (r, grid) = mcml::simulate_grid(&run, &o)?;
+        report(&r, a.json)?;
+        atomic::write(out, mcml::write_mco(&run, &r, &grid).as_bytes())
+            .with_context(|| format!("writing {}", out.display()))?;
+        eprintln!("wrote {}", out.display());
+    } else {
+        let r = transport::run(&stack, &o)?;
+        report(&r, a.json)?;
+    }
+    Ok(())
+}
+
+pub fn read_stack(path: &std::path::Path) -> anyhow::Result<Stack> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let file: transport::stack::StackFile =
+        serde_json::from_str(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
+    file.into_stack()
+        .map_err(|e| UsageError(format!("{}: {e}", path.display())).into())
+}
+
+fn report(r: &McResult, json: bool) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(r)?);
+        return Ok(());
+    }
+    println!(
+        "photons {}  threads {}  {:.3} s  {:.0} photons/s  {:.3e} scattering events/s",
+        r.photons, r.threads, r.seconds, r.photons_per_s, r.scattering_events_per_s
+    );
+    println!("specular reflectance Rsp  {:.6}", r.rsp);
+    println!("diffuse reflectance  Rd   {:.6} ± {:.6}", r.rd, r.rd_se);
+    println!(
+        "unscattered reflect.      {:.6} ± {:.6}",
+        r.rd_unscattered, r.rd_unscattered_se
+    );
+    println!("transmittance        Tt   {:.6} ± {:.6}", r.tt, r.tt_se);
+    for (i, (a, s)) in r.absorbed.iter().zip(&r.absorbed_se).enumerate() {
+        println!("absorbed in layer {i:<2}      {a:.6} ± {s:.6}");
+    }
+    println!("∫Rd(r) over the grid      {:.6}", r.rd_r_integrated);
+    println!("energy balance            {:.6}", r.energy());
+    Ok(())
+}

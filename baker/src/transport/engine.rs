@@ -1,0 +1,502 @@
+//! The photon loop and the batch runner.
+
+use std::time::Instant;
+
+use rand_core::Rng;
+use rayon::prelude::*;
+
+use super::boundary::{fresnel, normal_reflectance};
+use super::junction::HeightField;
+use super::phase::sample_hg;
+use super::rng::{batch_rng, uniform, BatchRng};
+use super::stack::{Stack, StackError, MAX_LAYERS};
+use super::tally::{McResult, Tally};
+
+/// Russian roulette: packets below this weight play (MCML's WEIGHT = 1e-4)…
+pub const ROULETTE_WEIGHT: f64 = 1e-4;
+/// …and survive with this chance, their weight divided by it (MCML's CHANCE = 0.1).
+pub const ROULETTE_CHANCE: f64 = 0.1;
+/// Boundary hits in a row without an interaction before a packet is stopped and reported as
+/// lost (only a clear layer trapping light by total internal reflection gets there).
+const MAX_BOUNCES: u32 = 100_000;
+
+/// How a run is split and seeded.
+#[derive(Debug, Clone)]
+pub struct McOptions {
+    pub photons: u64,
+    pub seed: u64,
+    /// Worker threads; `None` uses every core.
+    pub threads: Option<usize>,
+    /// Photons per batch (one RNG stream each). Results depend on it, not on the threads.
+    pub batch_size: u64,
+    /// Draw a progress bar on stderr (shown only on a terminal).
+    pub progress: bool,
+}
+
+impl McOptions {
+    pub fn new(photons: u64, seed: u64) -> Self {
+        Self {
+            photons,
+            seed,
+            threads: None,
+            batch_size: 10_000,
+            progress: false,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Hit {
+    Top,
+    Bottom,
+    Junction,
+}
+
+/// The stack in the form the photon loop reads: flat arrays, boundaries precomputed.
+#[derive(Debug, Clone)]
+pub(crate) struct Prepared {
+    pub nl: usize,
+    pub z: [f64; MAX_LAYERS + 1],
+    pub n: [f64; MAX_LAYERS + 2],
+    pub mua: [f64; MAX_LAYERS],
+    pub mus: [f64; MAX_LAYERS],
+    pub mut_: [f64; MAX_LAYERS],
+    /// 1/μt and 1/μs (∞ where the coefficient is 0): free path per unit optical depth.
+    pub inv_mut: [f64; MAX_LAYERS],
+    pub inv_mus: [f64; MAX_LAYERS],
+    /// μa/μt: the fraction of weight absorbed at an interaction.
+    pub absorb_frac: [f64; MAX_LAYERS],
+    pub g: [f64; MAX_LAYERS],
+    pub junction: Option<(usize, HeightField)>,
+    pub dr_mm: f64,
+    pub nr: usize,
+    pub rsp: f64,
+}
+
+impl Prepared {
+    pub fn new(s: &Stack) -> Result<Self, StackError> {
+        s.validate()?;
+        let nl = s.layers.len();
+        let zs = s.boundaries_mm();
+        let mut p = Prepared {
+            nl,
+            z: [0.0; MAX_LAYERS + 1],
+            // n[0] is the medium above, n[i + 1] layer i, n[nl + 1] the medium below.
+            n: [1.0; MAX_LAYERS + 2],
+            mua: [0.0; MAX_LAYERS],
+            mus: [0.0; MAX_LAYERS],
+            mut_: [0.0; MAX_LAYERS],
+            inv_mut: [f64::INFINITY; MAX_LAYERS],
+            inv_mus: [f64::INFINITY; MAX_LAYERS],
+            absorb_frac: [0.0; MAX_LAYERS],
+            g: [0.0; MAX_LAYERS],
+            junction: None,
+            dr_mm: s.grid.dr_mm,
+            nr: s.grid.nr,
+            rsp: normal_reflectance(s.n_above, s.layers[0].eta),
+        };
+        p.z[..=nl].copy_from_slice(&zs);
+        p.n[0] = s.n_above;
+        p.n[nl + 1] = s.n_below;
+        for (i, l) in s.layers.iter().enumerate() {
+            p.n[i + 1] = l.eta;
+            p.mua[i] = l.mua_per_mm;
+            p.mus[i] = l.mus_per_mm;
+            p.mut_[i] = l.mua_per_mm + l.mus_per_mm;
+            if p.mut_[i] > 0.0 {
+                p.inv_mut[i] = 1.0 / p.mut_[i];
+                p.absorb_frac[i] = l.mua_per_mm / p.mut_[i];
+            }
+            if l.mus_per_mm > 0.0 {
+                p.inv_mus[i] = 1.0 / l.mus_per_mm;
+            }
+            p.g[i] = l.g;
+        }
+        if let Some(j) = &s.junction {
+            if j.amplitude_mm > 0.0 {
+                p.junction = Some((j.upper_layer, HeightField::new(j, zs[j.upper_layer + 1])));
+            }
+        }
+        Ok(p)
+    }
+
+    /// Distance to the boundary the photon would reach first, up to `step`, and which one.
+    #[inline(always)]
+    fn boundary(&self, layer: usize, pos: &[f64; 3], u: &[f64; 3], step: f64) -> (f64, Hit) {
+        // Common case first: the step ends inside a planar layer; no division needed.
+        let z_end = pos[2] + u[2] * step;
+        let junction_layer =
+            matches!(&self.junction, Some((ju, _)) if layer == *ju || layer == ju + 1);
+        if !junction_layer && z_end > self.z[layer] && z_end < self.z[layer + 1] {
+            return (f64::INFINITY, Hit::Top);
+        }
+        let mut best = (f64::INFINITY, Hit::Top);
+        if u[2] < 0.0 {
+            best = (((self.z[layer] - pos[2]) / u[2]).max(0.0), Hit::Top);
+        } else if u[2] > 0.0 {
+            best = (((self.z[layer + 1] - pos[2]) / u[2]).max(0.0), Hit::Bottom);
+        }
+        if let Some((ju, hf)) = &self.junction {
+            // The planar interface at z̄ between layers ju and ju+1 is replaced by J(x, y).
+            let side = if layer == *ju {
+                -1.0
+            } else if layer == ju + 1 {
+                1.0
+            } else {
+                return best;
+            };
+            let planar_is_junction =
+                (side < 0.0 && best.1 == Hit::Bottom) || (side > 0.0 && best.1 == Hit::Top);
+            let t_max = if planar_is_junction {
+                step
+            } else {
+                best.0.min(step)
+            };
+            match hf.hit(*pos, *u, t_max, side) {
+                Some(t) => return (t, Hit::Junction),
+                None if planar_is_junction => return (f64::INFINITY, Hit::Junction),
+                None => {}
+            }
+        }
+        best
+    }
+}
+
+/// Receives what a photon does.
+pub(crate) trait Scorer {
+    /// Weight `dw` absorbed in `layer` at `pos`.
+    fn absorb(&mut self, layer: usize, dw: f64, pos: &[f64; 3]);
+    /// Leaves through the surface (`scattered`: after at least one scattering event) or the
+    /// bottom, with `weight` at `pos`, leaving at cos θ = `cos_out` outside the stack, with
+    /// per-layer path lengths `path` (white mode only).
+    fn escape(
+        &mut self,
+        top: bool,
+        scattered: bool,
+        weight: f64,
+        pos: &[f64; 3],
+        cos_out: f64,
+        path: &[f64],
+    );
+    fn lost(&mut self, weight: f64);
+    fn photon_done(&mut self);
+}
+
+/// MCML's Spin: new direction after scattering by θ (HG) and a uniform azimuth.
+#[inline(always)]
+fn spin(u: &mut [f64; 3], g: f64, rng: &mut BatchRng) {
+    let cost = sample_hg(g, uniform(rng.next_u64()));
+    let sint = (1.0 - cost * cost).max(0.0).sqrt();
+    // Uniform azimuth without trigonometry: a point in the unit disk gives angle 2φ.
+    let (cosp, sinp) = loop {
+        let a = 2.0 * uniform(rng.next_u64()) - 1.0;
+        let b = 2.0 * uniform(rng.next_u64()) - 1.0;
+        let r2 = a * a + b * b;
+        if r2 <= 1.0 && r2 > 1e-12 {
+            break ((a * a - b * b) / r2, 2.0 * a * b / r2);
+        }
+    };
+    let [ux, uy, uz] = *u;
+    if uz.abs() > 0.99999 {
+        *u = [sint * cosp, sint * sinp, cost * uz.signum()];
+    } else {
+        let temp = (1.0 - uz * uz).sqrt();
+        let k = sint / temp;
+        *u = [
+            k * (ux * uz * cosp - uy * sinp) + ux * cost,
+            k * (uy * uz * cosp + ux * sinp) + uy * cost,
+            -sint * cosp * temp + uz * cost,
+        ];
+    }
+}
+
+/// Traces one photon packet.
+///
+/// `WHITE = false`: MCML's scheme. Free paths from μt, weight × albedo at each interaction, the
+/// rest scored as absorbed.
+/// `WHITE = true`: free paths from μs only, no absorption. Per-layer path lengths are recorded
+/// so any μa applies later as exp(−Σ μa,i·Li). Roulette plays against the reference absorption
+/// `mua_ref` (weights corrected exactly), which bounds the cost.
+#[inline(always)]
+pub(crate) fn trace<const WHITE: bool, S: Scorer>(
+    p: &Prepared,
+    mua_ref: &[f64; MAX_LAYERS],
+    rng: &mut BatchRng,
+    s: &mut S,
+    events: &mut u64,
+) {
+    let mut pos = [0.0f64; 3];
+    let mut u = [0.0f64, 0.0, 1.0];
+    let mut w = 1.0 - p.rsp;
+    let mut layer = 0usize;
+    let mut scattered = false;
+    let mut s_left = 0.0f64;
+    let mut path = [0.0f64; MAX_LAYERS];
+    let mut log_w_ref = w.ln();
+    let ln_roulette = ROULETTE_WEIGHT.ln();
+    let mut bounces = 0u32;
+    loop {
+        if s_left <= 0.0 {
+            s_left = -uniform(rng.next_u64()).ln();
+        }
+        let coeff = if WHITE { p.mus[layer] } else { p.mut_[layer] };
+        let step = s_left
+            * if WHITE {
+                p.inv_mus[layer]
+            } else {
+                p.inv_mut[layer]
+            };
+        let (db, hit) = p.boundary(layer, &pos, &u, step);
+        if db.is_infinite() && step.is_infinite() {
+            // Travelling parallel to the layers through a clear layer: it never arrives (MCML
+            // kills such packets too).
+            s.lost(w);
+            s.photon_done();
+            return;
+        }
+        if db < step {
+            pos[0] += u[0] * db;
+            pos[1] += u[1] * db;
+            pos[2] += u[2] * db;
+            if WHITE {
+                path[layer] += db;
+                log_w_ref -= mua_ref[layer] * db;
+            }
+            if coeff > 0.0 {
+                s_left -= db * coeff;
+            }
+            bounces += 1;
+            if bounces > MAX_BOUNCES {
+                s.lost(w);
+                s.photon_done();
+                return;
+            }
+            match hit {
+                Hit::Top | Hit::Bottom => {
+                    let up = hit == Hit::Top;
+                    let (ni, nt) = (p.n[layer + 1], if up { p.n[layer] } else { p.n[layer + 2] });
+                    pos[2] = if up { p.z[layer] } else { p.z[layer + 1] };
+                    let (r, cos_t) = fresnel(ni, nt, u[2].abs());
+                    if r > 0.0 && (r >= 1.0 || uniform(rng.next_u64()) <= r) {
+                        u[2] = -u[2];
+                        continue;
+                    }
+                    let k = ni / nt;
+                    u[0] *= k;
+                    u[1] *= k;
+                    u[2] = if up { -cos_t } else { cos_t };
+                    let escaped = if up { layer == 0 } else { layer + 1 == p.nl };
+                    if escaped {
+                        s.escape(up, scattered, w, &pos, cos_t, &path[..p.nl]);
+                        s.photon_done();
+                        return;
+                    }
+                    layer = if up { layer - 1 } else { layer + 1 };
+                }
+                Hit::Junction => {
+                    let (ju, hf) = p.junction.as_ref().unwrap();
+                    let other = if layer == *ju { ju + 1 } else { *ju };
+                    let nv = hf.normal(pos[0], pos[1]);
+                    let c = u[0] * nv[0] + u[1] * nv[1] + u[2] * nv[2];
+                    let (ni, nt) = (p.n[layer + 1], p.n[other + 1]);
+                    let cos_i = c.abs().min(1.0);
+                    let (r, cos_t) = fresnel(ni, nt, cos_i);
+                    if r > 0.0 && (r >= 1.0 || uniform(rng.next_u64()) <= r) {
+                        for k in 0..3 {
+                            u[k] -= 2.0 * c * nv[k];
+                        }
+                    } else {
+                        let sg = c.signum();
+                        let eta = ni / nt;
+                        let a = cos_t - eta * cos_i;
+                        let mut t = [0.0; 3];
+                        for k in 0..3 {
+                            t[k] = eta * u[k] + a * sg * nv[k];
+                        }
+                        let inv = 1.0 / (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+                        u = [t[0] * inv, t[1] * inv, t[2] * inv];
+                        layer = other;
+                    }
+                    // Step off the surface so the next search starts on the right side.
+                    for k in 0..3 {
+                        pos[k] += u[k] * 1e-9;
+                    }
+                }
+            }
+        } else {
+            pos[0] += u[0] * step;
+            pos[1] += u[1] * step;
+            pos[2] += u[2] * step;
+            s_left = 0.0;
+            bounces = 0;
+            if WHITE {
+                path[layer] += step;
+                log_w_ref -= mua_ref[layer] * step;
+            } else {
+                let dw = w * p.absorb_frac[layer];
+                w -= dw;
+                s.absorb(layer, dw, &pos);
+            }
+            debug_assert!(w.is_finite());
+            spin(&mut u, p.g[layer], rng);
+            scattered = true;
+            *events += 1;
+            if WHITE {
+                if log_w_ref < ln_roulette {
+                    if uniform(rng.next_u64()) <= ROULETTE_CHANCE {
+                        w /= ROULETTE_CHANCE;
+                        log_w_ref -= ROULETTE_CHANCE.ln();
+                    } else {
+                        s.photon_done();
+                        return;
+                    }
+                }
+            } else if w < ROULETTE_WEIGHT {
+                if w > 0.0 && uniform(rng.next_u64()) <= ROULETTE_CHANCE {
+                    w /= ROULETTE_CHANCE;
+                } else {
+                    s.photon_done();
+                    return;
+                }
+            }
+        }
+    }
+}
+
+/// Scores a direct (absorbing) run into a [`Tally`].
+pub(crate) struct DirectScorer<'a> {
+    pub t: &'a mut Tally,
+    pub absorbed: [f64; MAX_LAYERS],
+    pub dr_mm: f64,
+}
+
+impl Scorer for DirectScorer<'_> {
+    #[inline(always)]
+    fn absorb(&mut self, layer: usize, dw: f64, _pos: &[f64; 3]) {
+        self.absorbed[layer] += dw;
+    }
+    fn escape(
+        &mut self,
+        top: bool,
+        scattered: bool,
+        weight: f64,
+        pos: &[f64; 3],
+        _cos_out: f64,
+        _path: &[f64],
+    ) {
+        let (x, y) = (pos[0], pos[1]);
+        if !top {
+            self.t.tt.add(weight);
+        } else if !scattered {
+            self.t.rd_unscattered.add(weight);
+        } else {
+            self.t.rd.add(weight);
+            let ir = ((x * x + y * y).sqrt() / self.dr_mm) as usize;
+            if let Some(b) = self.t.rd_r.get_mut(ir) {
+                b.add(weight);
+            }
+        }
+    }
+    fn lost(&mut self, weight: f64) {
+        self.t.lost.add(weight);
+    }
+    fn photon_done(&mut self) {
+        self.t.photons += 1;
+        for (a, s) in self.absorbed.iter_mut().zip(self.t.absorbed.iter_mut()) {
+            if *a != 0.0 {
+                s.add(*a);
+                *a = 0.0;
+            }
+        }
+    }
+}
+
+/// Runs batches `0..n_batches` on `threads` and reduces their outputs in batch order, a chunk
+/// at a time so memory stays bounded for any photon count.
+pub(crate) fn run_batches<T: Send>(
+    chunk_per_thread: u64,
+    photons: u64,
+    batch_size: u64,
+    threads: Option<usize>,
+    progress: bool,
+    work: impl Fn(u64, u64) -> T + Sync,
+    mut reduce: impl FnMut(T),
+) -> anyhow::Result<usize> {
+    let n_batches = photons.div_ceil(batch_size);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()?;
+    let used = pool.current_num_threads();
+    let bar = if progress {
+        indicatif::ProgressBar::new(photons)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} photons ({per_sec}, eta {eta})",
+        )
+        .expect("valid template"),
+    );
+    let chunk = chunk_per_thread.max(1) * used as u64;
+    let mut start = 0;
+    while start < n_batches {
+        let end = (start + chunk).min(n_batches);
+        let outs: Vec<T> = pool.install(|| {
+            (start..end)
+                .into_par_iter()
+                .map(|b| {
+                    let n = batch_size.min(photons - b * batch_size);
+                    let out = work(b, n);
+                    bar.inc(n);
+                    out
+                })
+                .collect()
+        });
+        outs.into_iter().for_each(&mut reduce);
+        start = end;
+    }
+    bar.finish_and_clear();
+    Ok(used)
+}
+
+/// Direct simulation of `stack`: every tally with its standard error.
+pub fn run(stack: &Stack, o: &McOptions) -> anyhow::Result<McResult> {
+    let p = Prepared::new(stack)?;
+    let nl = p.nl;
+    let no_ref = [0.0; MAX_LAYERS];
+    let t0 = Instant::now();
+    let mut total = Tally::new(nl, p.nr);
+    let threads = run_batches(
+        64,
+        o.photons,
+        o.batch_size.max(1),
+        o.threads,
+        o.progress,
+        |b, n| {
+            let mut rng = batch_rng(o.seed, b);
+            let mut t = Tally::new(nl, p.nr);
+            let mut events = 0u64;
+            {
+                let mut s = DirectScorer {
+                    t: &mut t,
+                    absorbed: [0.0; MAX_LAYERS],
+                    dr_mm: p.dr_mm,
+                };
+                for _ in 0..n {
+                    trace::<false, _>(&p, &no_ref, &mut rng, &mut s, &mut events);
+                }
+            }
+            t.scattering_events = events;
+            t
+        },
+        |t| total.merge(&t),
+    )?;
+    Ok(McResult::from_tally(
+        &total,
+        p.rsp,
+        p.dr_mm,
+        threads,
+        t0.elapsed().as_secs_f64(),
+    ))
+}

@@ -1,0 +1,300 @@
+//! The layer stack a transport run takes: plain numbers, validated once.
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// One laterally infinite layer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Layer {
+    pub name: String,
+    /// Thickness, mm; `f64::INFINITY` for a semi-infinite last layer.
+    pub d_mm: f64,
+    pub eta: f64,
+    pub mua_per_mm: f64,
+    pub mus_per_mm: f64,
+    /// Henyey–Greenstein anisotropy g ∈ (−1, 1).
+    pub g: f64,
+}
+
+/// The non-planar interface between layer `upper_layer` and the next one (thesis Eq. 1):
+/// z = z̄ + A·sin(ωx·x + φx)·sin(ωy·y + φy), z̄ the planar bottom of `upper_layer`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Junction {
+    pub upper_layer: usize,
+    pub amplitude_mm: f64,
+    pub omega_x_per_mm: f64,
+    pub omega_y_per_mm: f64,
+    #[serde(default)]
+    pub phi_x_rad: f64,
+    #[serde(default)]
+    pub phi_y_rad: f64,
+}
+
+/// Annular grid of the radial reflectance profile Rd(r).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    pub dr_mm: f64,
+    pub nr: usize,
+}
+
+impl Default for Grid {
+    fn default() -> Self {
+        Grid {
+            dr_mm: 0.01,
+            nr: 500,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stack {
+    /// Refractive index above the surface and below the last layer.
+    pub n_above: f64,
+    pub n_below: f64,
+    pub layers: Vec<Layer>,
+    pub junction: Option<Junction>,
+    pub grid: Grid,
+}
+
+#[derive(Debug, Error, PartialEq)]
+pub enum StackError {
+    #[error("the stack has no layers")]
+    Empty,
+    #[error("at most {max} layers are supported, got {got}")]
+    TooManyLayers { max: usize, got: usize },
+    #[error("layer {index} ({name}): {field} = {value} is out of range; allowed: {allowed}")]
+    OutOfRange {
+        index: usize,
+        name: String,
+        field: &'static str,
+        value: f64,
+        allowed: &'static str,
+    },
+    #[error("{field} = {value} is out of range; allowed: {allowed}")]
+    Global {
+        field: &'static str,
+        value: f64,
+        allowed: &'static str,
+    },
+    #[error("only the last layer may be semi-infinite (layer {index} is)")]
+    InfiniteNotLast { index: usize },
+    #[error("junction: {0}")]
+    Junction(String),
+}
+
+/// Most layers a stack may have (per-photon accumulators live on the stack).
+pub const MAX_LAYERS: usize = 16;
+
+impl Stack {
+    /// Checks every value; the engine relies on these invariants.
+    pub fn validate(&self) -> Result<(), StackError> {
+        if self.layers.is_empty() {
+            return Err(StackError::Empty);
+        }
+        if self.layers.len() > MAX_LAYERS {
+            return Err(StackError::TooManyLayers {
+                max: MAX_LAYERS,
+                got: self.layers.len(),
+            });
+        }
+        for (field, value) in [("n_above", self.n_above), ("n_below", self.n_below)] {
+            if !(value.is_finite() && (1.0..=5.0).contains(&value)) {
+                return Err(StackError::Global {
+                    field,
+                    value,
+                    allowed: "[1, 5]",
+                });
+            }
+        }
+        if !(self.grid.dr_mm.is_finite() && self.grid.dr_mm > 0.0) {
+            return Err(StackError::Global {
+                field: "grid.dr_mm",
+                value: self.grid.dr_mm,
+                allowed: "> 0",
+            });
+        }
+        if self.grid.nr == 0 || self.grid.nr > 1_000_000 {
+            return Err(StackError::Global {
+                field: "grid.nr",
+                value: self.grid.nr as f64,
+                allowed: "[1, 1000000]",
+            });
+        }
+        let last = self.layers.len() - 1;
+        for (i, l) in self.layers.iter().enumerate() {
+            let bad = |field, value, allowed| StackError::OutOfRange {
+                index: i,
+                name: l.name.clone(),
+                field,
+                value,
+                allowed,
+            };
+            if l.d_mm.is_infinite() && l.d_mm > 0.0 {
+                if i != last {
+                    return Err(StackError::InfiniteNotLast { index: i });
+                }
+            } else if !(l.d_mm.is_finite() && l.d_mm > 0.0) {
+                return Err(bad("d_mm", l.d_mm, "> 0, or \"inf\" for the last layer"));
+            }
+            if !(l.eta.is_finite() && (1.0..=5.0).contains(&l.eta)) {
+                return Err(bad("eta", l.eta, "[1, 5]"));
+            }
+            if !(l.mua_per_mm.is_finite() && l.mua_per_mm >= 0.0) {
+                return Err(bad("mua_per_mm", l.mua_per_mm, ">= 0"));
+            }
+            if !(l.mus_per_mm.is_finite() && l.mus_per_mm >= 0.0) {
+                return Err(bad("mus_per_mm", l.mus_per_mm, ">= 0"));
+            }
+            if !(l.g.is_finite() && l.g > -1.0 && l.g < 1.0) {
+                return Err(bad("g", l.g, "(-1, 1)"));
+            }
+            if l.d_mm.is_infinite() && l.mua_per_mm == 0.0 && l.mus_per_mm == 0.0 {
+                return Err(bad(
+                    "mua_per_mm",
+                    0.0,
+                    "> 0 or mus > 0 in a semi-infinite layer",
+                ));
+            }
+        }
+        if let Some(j) = &self.junction {
+            let u = j.upper_layer;
+            if u + 1 >= self.layers.len() {
+                return Err(StackError::Junction(format!(
+                    "upper_layer {u} needs a layer below it (the stack has {})",
+                    self.layers.len()
+                )));
+            }
+            if !(j.amplitude_mm.is_finite() && j.amplitude_mm >= 0.0) {
+                return Err(StackError::Junction(format!(
+                    "amplitude_mm = {} must be >= 0",
+                    j.amplitude_mm
+                )));
+            }
+            let (above, below) = (self.layers[u].d_mm, self.layers[u + 1].d_mm);
+            if j.amplitude_mm > 0.0 && (j.amplitude_mm >= above || j.amplitude_mm >= below) {
+                return Err(StackError::Junction(format!(
+                    "amplitude_mm = {} must be below the thickness of both layers it separates ({above} and {below} mm)",
+                    j.amplitude_mm
+                )));
+            }
+            for (name, v) in [
+                ("omega_x_per_mm", j.omega_x_per_mm),
+                ("omega_y_per_mm", j.omega_y_per_mm),
+                ("phi_x_rad", j.phi_x_rad),
+                ("phi_y_rad", j.phi_y_rad),
+            ] {
+                if !v.is_finite() {
+                    return Err(StackError::Junction(format!("{name} = {v} must be finite")));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Depth of the top of each layer and the bottom of the last, mm.
+    pub fn boundaries_mm(&self) -> Vec<f64> {
+        let mut z = vec![0.0];
+        for l in &self.layers {
+            z.push(z.last().unwrap() + l.d_mm);
+        }
+        z
+    }
+}
+
+/// `STACK.json` as users write it (`d_mm` may be the string "inf").
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StackFile {
+    pub n_above: f64,
+    pub n_below: f64,
+    pub layers: Vec<LayerFile>,
+    #[serde(default)]
+    pub grid: Option<Grid>,
+    #[serde(default)]
+    pub junction: Option<Junction>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LayerFile {
+    #[serde(default)]
+    pub name: Option<String>,
+    pub d_mm: Thickness,
+    pub eta: f64,
+    pub mua_per_mm: f64,
+    pub mus_per_mm: f64,
+    #[serde(default)]
+    pub g: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum Thickness {
+    Mm(f64),
+    Text(String),
+}
+
+impl StackFile {
+    pub fn into_stack(self) -> Result<Stack, StackError> {
+        let mut layers = Vec::new();
+        for (i, l) in self.layers.into_iter().enumerate() {
+            let d_mm = match l.d_mm {
+                Thickness::Mm(x) => x,
+                Thickness::Text(s) if s == "inf" => f64::INFINITY,
+                Thickness::Text(_) => f64::NAN,
+            };
+            layers.push(Layer {
+                name: l.name.unwrap_or_else(|| format!("layer {i}")),
+                d_mm,
+                eta: l.eta,
+                mua_per_mm: l.mua_per_mm,
+                mus_per_mm: l.mus_per_mm,
+                g: l.g,
+            });
+        }
+        let s = Stack {
+            n_above: self.n_above,
+            n_below: self.n_below,
+            layers,
+            junction: self.junction,
+            grid: self.grid.unwrap_or_default(),
+        };
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// The stack of a skin entry at wavelength index `i` (thesis §3.5): μs = μs′ with g = 0, air
+/// above, and below the hypodermis a medium of the hypodermis's own index, so light leaving
+/// the bottom is lost as transmittance. The junction comes from Eq. 1 when it is non-planar.
+pub fn from_skin(e: &formats::OpticsEntry, i: usize) -> Stack {
+    let layers: Vec<Layer> = e
+        .layers
+        .iter()
+        .map(|l| Layer {
+            name: l.name.clone(),
+            d_mm: l.d_mm,
+            eta: l.eta,
+            mua_per_mm: l.mua_per_mm[i],
+            mus_per_mm: l.musp_per_mm[i],
+            g: 0.0,
+        })
+        .collect();
+    let n_below = layers.last().map_or(1.0, |l| l.eta);
+    let j = &e.junction;
+    let junction = (j.amplitude_mm > 0.0 && e.model == "five_layer").then_some(Junction {
+        upper_layer: 1,
+        amplitude_mm: j.amplitude_mm,
+        omega_x_per_mm: j.omega_x_per_mm,
+        omega_y_per_mm: j.omega_y_per_mm,
+        phi_x_rad: j.phi_x_rad,
+        phi_y_rad: j.phi_y_rad,
+    });
+    Stack {
+        n_above: 1.0,
+        n_below,
+        layers,
+        junction,
+        grid: Grid::default(),
+    }
+}

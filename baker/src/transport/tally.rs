@@ -1,0 +1,132 @@
+//! What a transport run scores, with standard errors from per-photon Σx and Σx².
+
+use serde::Serialize;
+
+use crate::stats::Sums;
+
+/// Raw sums of one batch (or of a whole run once batches are merged in order).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tally {
+    pub photons: u64,
+    pub rd: Sums,
+    pub rd_unscattered: Sums,
+    pub tt: Sums,
+    pub absorbed: Vec<Sums>,
+    pub rd_r: Vec<Sums>,
+    /// Weight of photons stopped after too many boundary hits without interacting.
+    pub lost: Sums,
+    pub scattering_events: u64,
+}
+
+impl Tally {
+    pub fn new(layers: usize, nr: usize) -> Self {
+        Self {
+            photons: 0,
+            rd: Sums::default(),
+            rd_unscattered: Sums::default(),
+            tt: Sums::default(),
+            absorbed: vec![Sums::default(); layers],
+            rd_r: vec![Sums::default(); nr],
+            lost: Sums::default(),
+            scattering_events: 0,
+        }
+    }
+
+    pub fn merge(&mut self, o: &Tally) {
+        self.photons += o.photons;
+        self.rd.merge(&o.rd);
+        self.rd_unscattered.merge(&o.rd_unscattered);
+        self.tt.merge(&o.tt);
+        for (a, b) in self.absorbed.iter_mut().zip(&o.absorbed) {
+            a.merge(b);
+        }
+        for (a, b) in self.rd_r.iter_mut().zip(&o.rd_r) {
+            a.merge(b);
+        }
+        self.lost.merge(&o.lost);
+        self.scattering_events += o.scattering_events;
+    }
+}
+
+/// The result of a run, as `baker mc --json` prints it. Reflectances and transmittances are
+/// fractions of the incident power; `rd_r_per_mm2` is Rd(r) per unit area at the bin centres.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct McResult {
+    pub rsp: f64,
+    pub rsp_se: f64,
+    pub rd: f64,
+    pub rd_se: f64,
+    pub rd_unscattered: f64,
+    pub rd_unscattered_se: f64,
+    pub tt: f64,
+    pub tt_se: f64,
+    pub absorbed: Vec<f64>,
+    pub absorbed_se: Vec<f64>,
+    pub r_mm: Vec<f64>,
+    pub rd_r_per_mm2: Vec<f64>,
+    pub rd_r_per_mm2_se: Vec<f64>,
+    /// ∫ Rd(r) 2πr dr over the grid: equals `rd` up to light beyond the last bin.
+    pub rd_r_integrated: f64,
+    /// Weight of photons stopped for bouncing without interacting (reported, ideally 0).
+    pub lost: f64,
+    pub photons: u64,
+    pub threads: usize,
+    pub seconds: f64,
+    pub photons_per_s: f64,
+    pub scattering_events: u64,
+    pub scattering_events_per_s: f64,
+}
+
+impl McResult {
+    pub fn from_tally(t: &Tally, rsp: f64, dr_mm: f64, threads: usize, seconds: f64) -> Self {
+        let n = t.photons;
+        let area = |i: usize| std::f64::consts::PI * dr_mm * dr_mm * (2 * i + 1) as f64;
+        let rd_r: Vec<f64> = t
+            .rd_r
+            .iter()
+            .enumerate()
+            .map(|(i, s)| s.mean(n) / area(i))
+            .collect();
+        let rd_r_integrated = t.rd_r.iter().map(|s| s.mean(n)).sum();
+        Self {
+            rsp,
+            rsp_se: 0.0,
+            rd: t.rd.mean(n),
+            rd_se: t.rd.se(n),
+            rd_unscattered: t.rd_unscattered.mean(n),
+            rd_unscattered_se: t.rd_unscattered.se(n),
+            tt: t.tt.mean(n),
+            tt_se: t.tt.se(n),
+            absorbed: t.absorbed.iter().map(|s| s.mean(n)).collect(),
+            absorbed_se: t.absorbed.iter().map(|s| s.se(n)).collect(),
+            r_mm: (0..t.rd_r.len())
+                .map(|i| (i as f64 + 0.5) * dr_mm)
+                .collect(),
+            rd_r_per_mm2: rd_r,
+            rd_r_per_mm2_se: t
+                .rd_r
+                .iter()
+                .enumerate()
+                .map(|(i, s)| s.se(n) / area(i))
+                .collect(),
+            rd_r_integrated,
+            lost: t.lost.mean(n),
+            photons: n,
+            threads,
+            seconds,
+            photons_per_s: n as f64 / seconds.max(1e-12),
+            scattering_events: t.scattering_events,
+            scattering_events_per_s: t.scattering_events as f64 / seconds.max(1e-12),
+        }
+    }
+
+    /// Rsp + Rd + Tt + ΣA + lost: 1 up to statistical error.
+    pub fn energy(&self) -> f64 {
+        self.rsp
+            + self.rd
+            + self.rd_unscattered
+            + self.tt
+            + self.absorbed.iter().sum::<f64>()
+            + self.lost
+    }
+}

@@ -1,0 +1,293 @@
+//! The layered Monte Carlo engine against published values, conservation laws, and itself.
+//! Seeds are fixed; tolerances come from the estimators' standard errors.
+
+use baker::skin::{self, BodyLocation, Gender, MelaninInput, SkinParams, SkinType};
+use baker::spectral::WavelengthGrid;
+use baker::transport::{self, stack, Grid, Junction, Layer, McOptions, McResult, Stack};
+
+fn slab(n: f64, n_out: f64, d_mm: f64, mua: f64, mus: f64, g: f64) -> Stack {
+    Stack {
+        n_above: n_out,
+        n_below: n_out,
+        layers: vec![Layer {
+            name: "slab".into(),
+            d_mm,
+            eta: n,
+            mua_per_mm: mua,
+            mus_per_mm: mus,
+            g,
+        }],
+        junction: None,
+        grid: Grid {
+            dr_mm: 0.01,
+            nr: 200,
+        },
+    }
+}
+
+fn run(s: &Stack, photons: u64, seed: u64) -> McResult {
+    transport::run(s, &McOptions::new(photons, seed)).unwrap()
+}
+
+#[track_caller]
+fn within(value: f64, reference: f64, tol: f64, what: &str) {
+    assert!(
+        (value - reference).abs() <= tol,
+        "{what}: {value} vs {reference} (tolerance {tol})"
+    );
+}
+
+/// Wang, Jacques & Zheng (1995), Table 2: μa = 1, μs = 9 mm⁻¹, g = 0.75, d = 0.2 mm, n = 1
+/// (van de Hulst's tabulated Rd = 0.09739, Tt = 0.66096).
+#[test]
+fn mcml_paper_benchmark_slab() {
+    let r = run(&slab(1.0, 1.0, 0.2, 1.0, 9.0, 0.75), 1_000_000, 1);
+    within(r.rd, 0.09739, 3.0 * r.rd_se, "Rd");
+    within(r.tt, 0.66096, 3.0 * r.tt_se, "Tt");
+    assert_eq!(r.rsp, 0.0);
+}
+
+/// Semi-infinite medium, n = 1.5, μa = 1, μs = 9 mm⁻¹, g = 0: Rsp + Rd = 0.2600 (Giovanelli
+/// 1955, as tabulated in the MCML paper), within 3 SE plus the reference's rounding.
+#[test]
+fn giovanelli_semi_infinite_total_reflectance() {
+    let r = run(&slab(1.5, 1.0, f64::INFINITY, 1.0, 9.0, 0.0), 1_000_000, 2);
+    within(r.rsp + r.rd, 0.2600, 3.0 * r.rd_se + 0.00005, "Rsp + Rd");
+    assert!((r.rsp - 0.04).abs() < 1e-15);
+    assert_eq!(r.tt, 0.0);
+}
+
+fn skin_stack(t: SkinType, lambda_nm: f64, age: f64) -> Stack {
+    let p = SkinParams::new(
+        age,
+        Gender::Female,
+        BodyLocation::Face,
+        MelaninInput::SkinType(t),
+        1.0,
+    );
+    let o = skin::evaluate(&p, &WavelengthGrid::from_list(vec![lambda_nm])).unwrap();
+    let entry = formats::OpticsEntry {
+        name: "t".into(),
+        model: "five_layer".into(),
+        inputs: serde_json::Value::Null,
+        layers: o
+            .layers
+            .iter()
+            .map(|l| formats::OpticsLayer {
+                name: l.name.into(),
+                d_mm: l.d_mm,
+                eta: l.eta,
+                mua_per_mm: l.mua_per_mm.clone(),
+                musp_per_mm: l.musp_per_mm.clone(),
+            })
+            .collect(),
+        junction: formats::OpticsJunction {
+            z_mean_mm: o.junction.z_mean_mm,
+            amplitude_mm: o.junction.amplitude_mm,
+            omega_x_per_mm: o.junction.omega_x_per_mm,
+            omega_y_per_mm: o.junction.omega_y_per_mm,
+            phi_x_rad: o.junction.phi_x_rad,
+            phi_y_rad: o.junction.phi_y_rad,
+        },
+        surface: formats::OpticsSurface {
+            rz_um: 0.0,
+            sebum_mg_per_10cm2_3h: 0.0,
+            sebum_film_um: 0.0,
+            alpha_sr_rad: 0.0,
+            psi_s: 0.0,
+            beckmann_m: 0.0,
+            eta: 1.53,
+            f0: 0.0,
+        },
+        intermediate: serde_json::Value::Null,
+    };
+    stack::from_skin(&entry, 0)
+}
+
+#[track_caller]
+fn energy_conserved(r: &McResult) {
+    let se2: f64 =
+        r.rd_se.powi(2) + r.tt_se.powi(2) + r.absorbed_se.iter().map(|s| s * s).sum::<f64>();
+    within(
+        r.energy(),
+        1.0,
+        4.0 * se2.sqrt() + 1e-12,
+        "Rsp + Rd + Tt + ΣA",
+    );
+}
+
+#[test]
+fn energy_is_conserved_with_mismatched_layers_and_the_junction() {
+    let mut s = slab(1.4, 1.0, 0.5, 0.3, 20.0, 0.9);
+    s.layers.push(Layer {
+        name: "b".into(),
+        d_mm: 1.0,
+        eta: 1.33,
+        mua_per_mm: 0.05,
+        mus_per_mm: 5.0,
+        g: 0.5,
+    });
+    s.n_below = 1.6;
+    energy_conserved(&run(&s, 200_000, 3));
+    let skin = skin_stack(SkinType::II, 550.0, 30.0);
+    assert!(skin.junction.is_some());
+    let r = run(&skin, 50_000, 4);
+    energy_conserved(&r);
+    assert_eq!(r.lost, 0.0);
+    within(
+        r.rd_r_integrated,
+        r.rd,
+        0.02 * r.rd,
+        "∫Rd(r) vs Rd (light beyond 5 mm excluded)",
+    );
+    assert!(r.rd_r_integrated <= r.rd);
+}
+
+#[test]
+fn results_are_bit_identical_for_any_thread_count() {
+    let s = skin_stack(SkinType::III, 550.0, 30.0);
+    let mut base = None;
+    for threads in [1, 2, 3] {
+        let mut o = McOptions::new(30_000, 9);
+        o.threads = Some(threads);
+        let mut r = transport::run(&s, &o).unwrap();
+        assert_eq!(r.threads, threads);
+        // Timing fields aside, every number must match bit for bit.
+        r.threads = 0;
+        r.seconds = 0.0;
+        r.photons_per_s = 0.0;
+        r.scattering_events_per_s = 0.0;
+        match &base {
+            None => base = Some(r),
+            Some(b) => assert_eq!(&r, b, "threads = {threads}"),
+        }
+    }
+}
+
+#[test]
+fn planar_junction_limit() {
+    let mut s = skin_stack(SkinType::II, 550.0, 30.0);
+    let j = s.junction.unwrap();
+    // A = 0 is the planar case exactly.
+    s.junction = Some(Junction {
+        amplitude_mm: 0.0,
+        ..j
+    });
+    let zero = run(&s, 20_000, 5);
+    s.junction = None;
+    let planar = run(&s, 20_000, 5);
+    assert_eq!(
+        (zero.rd, zero.tt, &zero.absorbed),
+        (planar.rd, planar.tt, &planar.absorbed)
+    );
+    // A → 0 converges to it.
+    s.junction = Some(Junction {
+        amplitude_mm: 1e-5,
+        ..j
+    });
+    let tiny = run(&s, 200_000, 6);
+    let planar = run(&s.clone_without_junction(), 200_000, 7);
+    let se = (tiny.rd_se.powi(2) + planar.rd_se.powi(2)).sqrt();
+    within(tiny.rd, planar.rd, 3.0 * se, "Rd, A = 10 nm vs planar");
+    for i in 0..5 {
+        let se = (tiny.absorbed_se[i].powi(2) + planar.absorbed_se[i].powi(2)).sqrt();
+        within(tiny.absorbed[i], planar.absorbed[i], 3.0 * se, "absorbed");
+    }
+    // A real junction changes the answer: at 415 nm the rete ridges move absorption from the
+    // living epidermis to the papillary dermis (0.4717 → 0.4605 at 10⁶ photons, SE 0.0003).
+    let mut s = skin_stack(SkinType::II, 415.0, 30.0);
+    let wavy = run(&s, 200_000, 8);
+    s.junction = None;
+    let flat = run(&s, 200_000, 8);
+    let se = (wavy.absorbed_se[1].powi(2) + flat.absorbed_se[1].powi(2)).sqrt();
+    assert!(
+        flat.absorbed[1] - wavy.absorbed[1] > 4.0 * se,
+        "LE absorption {} vs planar {}",
+        wavy.absorbed[1],
+        flat.absorbed[1]
+    );
+    assert!(wavy.absorbed[2] > flat.absorbed[2]);
+}
+
+trait WithoutJunction {
+    fn clone_without_junction(&self) -> Stack;
+}
+impl WithoutJunction for Stack {
+    fn clone_without_junction(&self) -> Stack {
+        Stack {
+            junction: None,
+            ..self.clone()
+        }
+    }
+}
+
+/// Absorption reuse equals direct absorbing simulation (5-layer skin, junction included, types
+/// I and VI at 415, 550, 650 nm: one white run per wavelength serves both types).
+#[test]
+fn absorption_reuse_matches_direct_simulation() {
+    for (k, lambda) in [415.0, 550.0, 650.0].into_iter().enumerate() {
+        let light = skin_stack(SkinType::I, lambda, 30.0);
+        let dark = skin_stack(SkinType::VI, lambda, 30.0);
+        for (a, b) in light.layers.iter().zip(&dark.layers) {
+            assert_eq!(
+                (a.d_mm, a.mus_per_mm, a.eta),
+                (b.d_mm, b.mus_per_mm, b.eta),
+                "types share scattering"
+            );
+        }
+        let mua = |s: &Stack| s.layers.iter().map(|l| l.mua_per_mm).collect::<Vec<f64>>();
+        let reference: Vec<f64> = mua(&light)
+            .iter()
+            .zip(mua(&dark))
+            .map(|(a, b)| a.min(b))
+            .collect();
+        let white =
+            transport::run_white(&light, &reference, &McOptions::new(100_000, 100 + k as u64))
+                .unwrap();
+        for (s, seed) in [(&light, 200), (&dark, 300)] {
+            let reused = white.apply(&mua(s));
+            let direct = run(s, 100_000, seed + k as u64);
+            for (name, w, d, sw, sd) in [
+                ("Rd", reused.rd, direct.rd, reused.rd_se, direct.rd_se),
+                ("Tt", reused.tt, direct.tt, reused.tt_se, direct.tt_se),
+                (
+                    "Rd within 1 mm",
+                    reused.rd_r_per_mm2[..100]
+                        .iter()
+                        .zip(&reused.r_mm)
+                        .map(|(x, r)| x * 2.0 * std::f64::consts::PI * r * 0.01)
+                        .sum::<f64>(),
+                    direct.rd_r_per_mm2[..100]
+                        .iter()
+                        .zip(&direct.r_mm)
+                        .map(|(x, r)| x * 2.0 * std::f64::consts::PI * r * 0.01)
+                        .sum::<f64>(),
+                    reused.rd_se,
+                    direct.rd_se,
+                ),
+            ] {
+                let se = (sw * sw + sd * sd).sqrt();
+                within(w, d, 3.5 * se + 1e-9, &format!("{name} at {lambda} nm"));
+            }
+        }
+    }
+}
+
+#[test]
+fn white_run_needs_a_reference_absorption_in_a_semi_infinite_layer() {
+    let s = slab(1.4, 1.0, f64::INFINITY, 0.1, 10.0, 0.8);
+    let e = transport::run_white(&s, &[0.0], &McOptions::new(10, 1)).unwrap_err();
+    assert!(e.to_string().contains("semi-infinite"), "{e}");
+}
+
+#[test]
+fn invalid_stacks_are_rejected_with_the_field() {
+    let mut s = slab(1.4, 1.0, 0.2, 0.1, 10.0, 1.2);
+    assert!(s.validate().unwrap_err().to_string().contains("g = 1.2"));
+    s.layers[0].g = 0.5;
+    s.layers[0].d_mm = -1.0;
+    assert!(s.validate().unwrap_err().to_string().contains("d_mm"));
+    let mut t = skin_stack(SkinType::II, 550.0, 30.0);
+    t.junction.as_mut().unwrap().amplitude_mm = 0.5;
+    assert!(t.validate().unwrap_err().to_string().contains("junction"));
+}
