@@ -82,18 +82,7 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
         let s = load_spec(spec)?;
         let name = a.entry.as_deref().unwrap();
         let entries = super::optics::evaluate_entries(&s, Some(name))?;
-        let lambda = a.lambda_nm.unwrap();
-        let lam = s.wavelengths.lambda_nm();
-        let i = lam
-            .iter()
-            .position(|&l| (l - lambda).abs() < 1e-9)
-            .ok_or_else(|| {
-                UsageError(format!(
-                    "--lambda-nm {lambda}: not on the spec's wavelength grid ({}–{} nm)",
-                    lam[0],
-                    lam[lam.len() - 1]
-                ))
-            })?;
+        let i = super::optics::wavelength_index(&s, a.lambda_nm.unwrap(), "--lambda-nm")?;
         transport::stack::from_skin(&entries[0], i)
     } else if let Some(path) = &a.stack {
         read_stack(path)?

@@ -89,17 +89,7 @@ pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
     }
     if let Some(lambda) = a.mci {
         let e = &entries[0];
-        let i = lam
-            .iter()
-            .position(|&l| (l - lambda).abs() < 1e-9)
-            .ok_or_else(|| {
-                UsageError(format!(
-                    "--mci {lambda}: not on the spec's wavelength grid ({}–{} nm, {} values)",
-                    lam[0],
-                    lam[lam.len() - 1],
-                    lam.len()
-                ))
-            })?;
+        let i = wavelength_index(&spec, lambda, "--mci")?;
         let path = a
             .mci_out
             .clone()
@@ -123,6 +113,22 @@ pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
         print!("{}", text_report(lam, &entries));
     }
     Ok(())
+}
+
+/// Index of `lambda_nm` on the spec's wavelength grid, or a usage error naming `flag`.
+pub fn wavelength_index(spec: &SkinSpec, lambda_nm: f64, flag: &str) -> anyhow::Result<usize> {
+    let lam = spec.wavelengths.lambda_nm();
+    lam.iter()
+        .position(|&l| (l - lambda_nm).abs() < 1e-9)
+        .ok_or_else(|| {
+            UsageError(format!(
+                "{flag} {lambda_nm}: not on the spec's wavelength grid ({}–{} nm, {} values)",
+                lam[0],
+                lam[lam.len() - 1],
+                lam.len()
+            ))
+            .into()
+        })
 }
 
 pub fn write_plots(

@@ -185,6 +185,20 @@ pub(crate) trait Scorer {
 /// MCML's Spin: new direction after scattering by θ (HG) and a uniform azimuth.
 #[inline(always)]
 fn spin(u: &mut [f64; 3], g: f64, rng: &mut BatchRng) {
+    if g == 0.0 {
+        // Isotropic (the thesis transports μs′ with g = 0): the new direction does not depend
+        // on the old one, so sample the sphere directly (Marsaglia 1972) with no rotation.
+        loop {
+            let a = 2.0 * uniform(rng.next_u64()) - 1.0;
+            let b = 2.0 * uniform(rng.next_u64()) - 1.0;
+            let s = a * a + b * b;
+            if s < 1.0 {
+                let k = 2.0 * (1.0 - s).sqrt();
+                *u = [a * k, b * k, 1.0 - 2.0 * s];
+                return;
+            }
+        }
+    }
     let cost = sample_hg(g, uniform(rng.next_u64()));
     let sint = (1.0 - cost * cost).max(0.0).sqrt();
     // Uniform azimuth without trigonometry: a point in the unit disk gives angle 2φ.

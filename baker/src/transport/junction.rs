@@ -24,6 +24,47 @@ pub const MIN_STEP_MM: f64 = 2e-4;
 /// Root refinement stops when the bracket is this narrow, mm.
 const ROOT_TOL_MM: f64 = 1e-12;
 
+/// sin and cos of `x` for the height field: quadrant reduction (Cody–Waite, π/2 split in
+/// three parts) and Taylor polynomials on [−π/4, π/4], truncation error < 1e-15. Several times
+/// cheaper than the C library's general routine; the arguments here stay below ~10⁴ rad.
+#[inline(always)]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    // π/2 = P1 + P2 + P3, P1 and P2 with 30-bit mantissas so k·P1 and k·P2 are exact.
+    const P1: f64 = 1.570_796_325_802_803;
+    const P2: f64 = 9.920_935_791_635_221e-10;
+    const P3: f64 = 5.170_182_981_794_105e-19;
+    // Round to the nearest quadrant with an integer cast (f64::round is a library call on
+    // baseline x86-64).
+    let q = x * std::f64::consts::FRAC_2_PI;
+    let ki = (q + if q >= 0.0 { 0.5 } else { -0.5 }) as i64;
+    let k = ki as f64;
+    let r = ((x - k * P1) - k * P2) - k * P3;
+    let r2 = r * r;
+    // sin r = r − r³/3! + … − r¹⁵/15!,  cos r = 1 − r²/2! + … − r¹⁴/14!
+    let s = r
+        * (1.0
+            + r2 * (-1.0 / 6.0
+                + r2 * (1.0 / 120.0
+                    + r2 * (-1.0 / 5040.0
+                        + r2 * (1.0 / 362_880.0
+                            + r2 * (-1.0 / 39_916_800.0
+                                + r2 * (1.0 / 6_227_020_800.0
+                                    + r2 * (-1.0 / 1_307_674_368_000.0))))))));
+    let c = 1.0
+        + r2 * (-0.5
+            + r2 * (1.0 / 24.0
+                + r2 * (-1.0 / 720.0
+                    + r2 * (1.0 / 40_320.0
+                        + r2 * (-1.0 / 3_628_800.0
+                            + r2 * (1.0 / 479_001_600.0 + r2 * (-1.0 / 87_178_291_200.0)))))));
+    match ki & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
 impl HeightField {
     pub fn new(j: &Junction, z_mean_mm: f64) -> Self {
         Self {
@@ -39,13 +80,14 @@ impl HeightField {
     /// J(x, y), mm.
     #[inline]
     pub fn z(&self, x: f64, y: f64) -> f64 {
-        self.z_mean_mm + self.a * (self.wx * x + self.px).sin() * (self.wy * y + self.py).sin()
+        self.z_mean_mm
+            + self.a * sin_cos(self.wx * x + self.px).0 * sin_cos(self.wy * y + self.py).0
     }
 
     /// Unit normal of the surface z − J(x, y) = 0, pointing to +z (into the deeper layer).
     pub fn normal(&self, x: f64, y: f64) -> [f64; 3] {
-        let (sx, cx) = (self.wx * x + self.px).sin_cos();
-        let (sy, cy) = (self.wy * y + self.py).sin_cos();
+        let (sx, cx) = sin_cos(self.wx * x + self.px);
+        let (sy, cy) = sin_cos(self.wy * y + self.py);
         let jx = self.a * self.wx * cx * sy;
         let jy = self.a * self.wy * sx * cy;
         let inv = 1.0 / (jx * jx + jy * jy + 1.0).sqrt();
@@ -65,8 +107,8 @@ impl HeightField {
         let (wxu, wyu) = (self.wx * u[0], self.wy * u[1]);
         let g = |t: f64| side * (p[2] + u[2] * t - self.z(p[0] + u[0] * t, p[1] + u[1] * t));
         let g_and_slope = |t: f64| {
-            let (sx, cx) = (self.wx * (p[0] + u[0] * t) + self.px).sin_cos();
-            let (sy, cy) = (self.wy * (p[1] + u[1] * t) + self.py).sin_cos();
+            let (sx, cx) = sin_cos(self.wx * (p[0] + u[0] * t) + self.px);
+            let (sy, cy) = sin_cos(self.wy * (p[1] + u[1] * t) + self.py);
             let j = self.z_mean_mm + self.a * sx * sy;
             let dj = self.a * (wxu * cx * sy + wyu * sx * cy);
             (side * (p[2] + u[2] * t - j), side * (u[2] - dj))
@@ -176,6 +218,17 @@ mod tests {
             },
             0.1,
         )
+    }
+
+    #[test]
+    fn fast_sin_cos_matches_the_c_library() {
+        let mut worst: f64 = 0.0;
+        for i in -200_000..200_000 {
+            let x = i as f64 * 0.0123457 + 0.3;
+            let (s, c) = sin_cos(x);
+            worst = worst.max((s - x.sin()).abs()).max((c - x.cos()).abs());
+        }
+        assert!(worst < 1e-13, "{worst}");
     }
 
     #[test]

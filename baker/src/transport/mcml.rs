@@ -299,27 +299,44 @@ pub fn simulate_grid(run: &McmlRun, o: &McOptions) -> anyhow::Result<(McResult, 
     Ok((r, grid))
 }
 
-/// MCML's `%G`: 6 significant digits, trailing zeros removed, exponent form when needed.
-fn g6(x: f64) -> String {
-    if x == 0.0 {
-        return "0".into();
-    }
-    let exp = x.abs().log10().floor() as i32;
-    if !(-5..6).contains(&exp) {
-        let s = format!("{:.5E}", x);
-        let (m, e) = s.split_once('E').unwrap();
-        let m = m.trim_end_matches('0').trim_end_matches('.');
-        let e: i32 = e.parse().unwrap();
-        format!("{m}E{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
+/// C's `%.<sig>G`: `sig` significant digits, trailing zeros removed, exponent form when the
+/// exponent is below −4 or at least `sig`.
+fn c_g(x: f64, sig: i32) -> String {
+    let exp = if x == 0.0 {
+        0
     } else {
-        let decimals = (5 - exp).max(0) as usize;
-        let s = format!("{:.*}", decimals, x);
-        if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        x.abs().log10().floor() as i32
+    };
+    let trim = |m: &str| -> String {
+        if m.contains('.') {
+            m.trim_end_matches('0').trim_end_matches('.').to_string()
         } else {
-            s
+            m.to_string()
         }
+    };
+    if !(-5..sig).contains(&exp) {
+        let s = format!("{:.*E}", (sig - 1) as usize, x);
+        let (m, e) = s.split_once('E').unwrap();
+        let e: i32 = e.parse().unwrap();
+        format!(
+            "{}E{}{:02}",
+            trim(m),
+            if e < 0 { '-' } else { '+' },
+            e.abs()
+        )
+    } else {
+        trim(&format!("{:.*}", (sig - 1 - exp).max(0) as usize, x))
     }
+}
+
+/// MCML's `%G`.
+fn g6(x: f64) -> String {
+    c_g(x, 6)
+}
+
+/// C's `%12.4G`.
+fn g4(x: f64) -> String {
+    format!("{:>12}", c_g(x, 4))
 }
 
 /// C's `%12.4E` (two-digit exponent, as glibc prints it).
@@ -331,30 +348,6 @@ fn e4(x: f64) -> String {
         "{:>12}",
         format!("{m}E{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
     )
-}
-
-/// C's `%12.4G`.
-fn g4(x: f64) -> String {
-    let exp = if x == 0.0 {
-        0
-    } else {
-        x.abs().log10().floor() as i32
-    };
-    let s = if !(-5..4).contains(&exp) {
-        let s = format!("{:.3E}", x);
-        let (m, e) = s.split_once('E').unwrap();
-        let m = m.trim_end_matches('0').trim_end_matches('.');
-        let e: i32 = e.parse().unwrap();
-        format!("{m}E{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
-    } else {
-        let s = format!("{:.*}", (3 - exp).max(0) as usize, x);
-        if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        }
-    };
-    format!("{s:>12}")
 }
 
 /// The `.mco` text of a finished run, scaled as MCML's SumScaleResult does. Rsp is written as the
