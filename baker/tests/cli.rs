@@ -395,5 +395,42 @@ fn mc_reads_mci_and_writes_mco() {
     );
     // Benchmark slab, 20,000 photons: Rd and Tt near van de Hulst's values.
     assert!((rat[1] - 0.09739).abs() < 0.01 && (rat[3] - 0.66096).abs() < 0.01);
-    assert!(dir.path().join("two.mco").exists());
+    // As in MCML, Rsp is the analytic specular reflectance; light reflected back without
+    // scattering counts in Rd.
+    let two = std::fs::read_to_string(dir.path().join("two.mco")).unwrap();
+    let rsp: f64 = two
+        .lines()
+        .skip_while(|l| !l.starts_with("RAT"))
+        .nth(1)
+        .unwrap()
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (rsp - ((1.37f64 - 1.0) / 2.37).powi(2)).abs() < 1e-6,
+        "Rsp {rsp}"
+    );
+}
+
+#[test]
+fn issue4_closed_stdout_ends_quietly() {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_baker"))
+        .args(["optics", "specs/fitzpatrick.yaml"])
+        .current_dir(repo())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away, as with `| head`
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
 }

@@ -48,8 +48,8 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
         junction: None,
         ..wavy.clone()
     };
-    println!("| stack | threads | photons | best s | photons/s | scattering events/s | ns/event/thread |");
-    println!("|---|---|---|---|---|---|---|");
+    outln!("| stack | threads | photons | best s | photons/s | scattering events/s | ns/event/thread |")?;
+    outln!("|---|---|---|---|---|---|---|")?;
     for (name, s) in [
         ("planar junction", &flat),
         ("Eq. 1 junction (A = 50 µm)", &wavy),
@@ -65,14 +65,14 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
                 }
             }
             let r = best.unwrap();
-            println!(
+            outln!(
                 "| {name} | {t} | {} | {:.3} | {:.0} | {:.3e} | {:.1} |",
                 r.photons,
                 r.seconds,
                 r.photons_per_s,
                 r.scattering_events_per_s,
                 1e9 * t as f64 / r.scattering_events_per_s
-            );
+            )?;
         }
     }
     Ok(())

@@ -118,24 +118,29 @@ pub fn read_stack(path: &std::path::Path) -> anyhow::Result<Stack> {
 
 fn report(r: &McResult, json: bool) -> anyhow::Result<()> {
     if json {
-        println!("{}", serde_json::to_string(r)?);
+        outln!("{}", serde_json::to_string(r)?)?;
         return Ok(());
     }
-    println!(
+    outln!(
         "photons {}  threads {}  {:.3} s  {:.0} photons/s  {:.3e} scattering events/s",
-        r.photons, r.threads, r.seconds, r.photons_per_s, r.scattering_events_per_s
-    );
-    println!("specular reflectance Rsp  {:.6}", r.rsp);
-    println!("diffuse reflectance  Rd   {:.6} ± {:.6}", r.rd, r.rd_se);
-    println!(
+        r.photons,
+        r.threads,
+        r.seconds,
+        r.photons_per_s,
+        r.scattering_events_per_s
+    )?;
+    outln!("specular reflectance Rsp  {:.6}", r.rsp)?;
+    outln!("diffuse reflectance  Rd   {:.6} ± {:.6}", r.rd, r.rd_se)?;
+    outln!(
         "unscattered reflect.      {:.6} ± {:.6}",
-        r.rd_unscattered, r.rd_unscattered_se
-    );
-    println!("transmittance        Tt   {:.6} ± {:.6}", r.tt, r.tt_se);
+        r.rd_unscattered,
+        r.rd_unscattered_se
+    )?;
+    outln!("transmittance        Tt   {:.6} ± {:.6}", r.tt, r.tt_se)?;
     for (i, (a, s)) in r.absorbed.iter().zip(&r.absorbed_se).enumerate() {
-        println!("absorbed in layer {i:<2}      {a:.6} ± {s:.6}");
+        outln!("absorbed in layer {i:<2}      {a:.6} ± {s:.6}")?;
     }
-    println!("∫Rd(r) over the grid      {:.6}", r.rd_r_integrated);
-    println!("energy balance            {:.6}", r.energy());
+    outln!("∫Rd(r) over the grid      {:.6}", r.rd_r_integrated)?;
+    outln!("energy balance            {:.6}", r.energy())?;
     Ok(())
 }

@@ -1,5 +1,21 @@
 //! The commands behind the `baker` binary. `main.rs` only parses; everything runs from here.
 
+/// `println!` that returns an error instead of panicking when stdout is closed (`| head`).
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($t)*)
+    }};
+}
+
+/// `print!` counterpart of [`outln!`].
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($t)*)
+    }};
+}
+
 mod bake;
 mod bench;
 mod mc;
@@ -49,16 +65,16 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Validate { spec } => {
             let s = load_spec(&spec)?;
-            println!(
+            outln!(
                 "{}: ok, {} entries, {} wavelengths ({}–{} nm)",
                 spec.display(),
                 s.entries.len(),
                 s.wavelengths.len(),
                 s.wavelengths.lambda_nm()[0],
                 s.wavelengths.lambda_nm()[s.wavelengths.len() - 1]
-            );
+            )?;
             for e in &s.entries {
-                println!("  {} (line {})", e.name, e.line);
+                outln!("  {} (line {})", e.name, e.line)?;
             }
             Ok(())
         }

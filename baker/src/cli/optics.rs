@@ -108,9 +108,9 @@ pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
     }
     if a.json {
         let doc = output::document::document(&spec.file, lam, entries);
-        println!("{}", serde_json::to_string_pretty(&doc)?);
+        outln!("{}", serde_json::to_string_pretty(&doc)?)?;
     } else if !wrote_files {
-        print!("{}", text_report(lam, &entries));
+        out!("{}", text_report(lam, &entries))?;
     }
     Ok(())
 }

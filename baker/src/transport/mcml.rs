@@ -248,11 +248,13 @@ pub fn simulate_grid(run: &McmlRun, o: &McOptions) -> anyhow::Result<(McResult, 
     let t0 = Instant::now();
     let mut total = Tally::new(p.nl, p.nr);
     let mut grid = empty();
-    // Grids can be large: keep only a couple of batches per thread in flight.
+    // Grids can be large (nr·nz values per batch): batches 10× larger than usual amortise
+    // their allocation, and only a couple per thread are in flight. Still deterministic for a
+    // given seed, whatever the thread count.
     let threads = run_batches(
         2,
         o.photons,
-        o.batch_size.max(1),
+        o.batch_size.max(1) * 10,
         o.threads,
         o.progress,
         |b, n| {
@@ -350,9 +352,10 @@ fn e4(x: f64) -> String {
     )
 }
 
-/// The `.mco` text of a finished run, scaled as MCML's SumScaleResult does. Rsp is written as the
-/// analytic specular reflectance plus light reflected without scattering (MCML folds the
-/// multiple reflections of a clear first layer into Rsp the same way); Rd is the diffuse part.
+/// The `.mco` text of a finished run, scaled as MCML's SumScaleResult does. As in MCML, Rsp is
+/// the analytic specular reflectance and Rd everything else that leaves the surface, light
+/// reflected back without scattering included. (MCML moves the multiple reflections of a clear
+/// first layer into Rsp; here they stay in Rd.)
 pub fn write_mco(run: &McmlRun, r: &McResult, g: &McmlGrid) -> String {
     let (nz, nr, na) = (run.nz, run.nr, run.na);
     let (dz, dr) = (run.dz_cm, run.dr_cm);
@@ -424,16 +427,8 @@ pub fn write_mco(run: &McmlRun, r: &McResult, g: &McmlGrid) -> String {
     let rd_total: f64 = rd_r.iter().sum::<f64>() / n;
     let a_total: f64 = a_z.iter().sum::<f64>() / n;
     let tt_total: f64 = tt_r.iter().sum::<f64>() / n;
-    let _ = writeln!(
-        s,
-        "{:<14} \t#Specular reflectance [-]",
-        g6(r.rsp + r.rd_unscattered)
-    );
-    let _ = writeln!(
-        s,
-        "{:<14} \t#Diffuse reflectance [-]",
-        g6(rd_total - r.rd_unscattered)
-    );
+    let _ = writeln!(s, "{:<14} \t#Specular reflectance [-]", g6(r.rsp));
+    let _ = writeln!(s, "{:<14} \t#Diffuse reflectance [-]", g6(rd_total));
     let _ = writeln!(s, "{:<14} \t#Absorbed fraction [-]", g6(a_total));
     let _ = write!(s, "{:<14} \t#Transmittance [-]\n\n", g6(tt_total));
     s.push_str("A_l #Absorption as a function of layer. [-]\n");
