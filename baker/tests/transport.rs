@@ -66,41 +66,12 @@ fn skin_stack(t: SkinType, lambda_nm: f64, age: f64) -> Stack {
         1.0,
     );
     let o = skin::evaluate(&p, &WavelengthGrid::from_list(vec![lambda_nm])).unwrap();
-    let entry = formats::OpticsEntry {
+    let resolved = baker::spec::ResolvedEntry {
         name: "t".into(),
-        model: "five_layer".into(),
-        inputs: serde_json::Value::Null,
-        layers: o
-            .layers
-            .iter()
-            .map(|l| formats::OpticsLayer {
-                name: l.name.into(),
-                d_mm: l.d_mm,
-                eta: l.eta,
-                mua_per_mm: l.mua_per_mm.clone(),
-                musp_per_mm: l.musp_per_mm.clone(),
-            })
-            .collect(),
-        junction: formats::OpticsJunction {
-            z_mean_mm: o.junction.z_mean_mm,
-            amplitude_mm: o.junction.amplitude_mm,
-            omega_x_per_mm: o.junction.omega_x_per_mm,
-            omega_y_per_mm: o.junction.omega_y_per_mm,
-            phi_x_rad: o.junction.phi_x_rad,
-            phi_y_rad: o.junction.phi_y_rad,
-        },
-        surface: formats::OpticsSurface {
-            rz_um: 0.0,
-            sebum_mg_per_10cm2_3h: 0.0,
-            sebum_film_um: 0.0,
-            alpha_sr_rad: 0.0,
-            psi_s: 0.0,
-            beckmann_m: 0.0,
-            eta: 1.53,
-            f0: 0.0,
-        },
-        intermediate: serde_json::Value::Null,
+        line: 0,
+        params: p,
     };
+    let entry = baker::output::document::entry(&resolved, &o);
     stack::from_skin(&entry, 0)
 }
 

@@ -31,9 +31,9 @@ pub struct McArgs {
     /// Wavelength of the skin entry, nm (on the spec's grid).
     #[arg(long, value_name = "NM", requires = "spec")]
     pub lambda_nm: Option<f64>,
-    /// Photon packets to trace.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub photons: u64,
+    /// Photon packets to trace (default 1,000,000; with --mci-in, each run's own count).
+    #[arg(long)]
+    pub photons: Option<u64>,
     /// Seed: the same input and seed give bit-identical output for any thread count.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -46,10 +46,10 @@ pub struct McArgs {
 }
 
 pub fn run(a: McArgs) -> anyhow::Result<()> {
-    let mut o = McOptions::new(a.photons, a.seed);
+    let mut o = McOptions::new(a.photons.unwrap_or(1_000_000), a.seed);
     o.threads = a.threads;
     o.progress = !a.json;
-    if a.photons == 0 {
+    if a.photons == Some(0) {
         return Err(UsageError("--photons must be at least 1".into()).into());
     }
     if let Some(path) = &a.mci_in {
@@ -59,7 +59,7 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
             mcml::parse_mci(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
         for (k, run) in runs.iter().enumerate() {
             let mut ok = o.clone();
-            if a.photons == 1_000_000 {
+            if a.photons.is_none() {
                 ok.photons = run.photons; // the file's own photon count unless --photons is given
             }
             let (r, grid) = mcml::simulate_grid(run, &ok)?;
