@@ -8,7 +8,7 @@ How to run (from anywhere; the repository root is found from this file's path):
     python3 validation/check_skin_optics.py SPEC [SPEC...]  # other specs
     python3 validation/check_skin_optics.py --baker target/release/baker  # skip cargo
 
-Default specs: specs/fitzpatrick.yaml (if it exists) and validation/specs/optics_crosscheck.yaml.
+Default specs: tests/specs/optics_examples.yaml and validation/specs/optics_crosscheck.yaml.
 
 For each spec the script runs `cargo run --release -q -p baker -- optics SPEC --json` in the
 repository root and, for every entry, layer and wavelength, recomputes μa and μs′ in Python
@@ -71,7 +71,7 @@ except ImportError:  # pragma: no cover
 
 REPO = Path(__file__).resolve().parent.parent
 DATA = REPO / "baker" / "src" / "spectral" / "data"
-DEFAULT_SPECS = [REPO / "specs" / "fitzpatrick.yaml", REPO / "validation" / "specs" / "optics_crosscheck.yaml"]
+DEFAULT_SPECS = [REPO / "tests" / "specs" / "optics_examples.yaml", REPO / "validation" / "specs" / "optics_crosscheck.yaml"]
 RTOL = 1e-5
 LN10 = math.log(10.0)
 
@@ -367,7 +367,7 @@ def check_data_tables() -> tuple[list[str], int, int]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("specs", nargs="*", help="spec files (default: specs/fitzpatrick.yaml if present, and validation/specs/optics_crosscheck.yaml)")
+    ap.add_argument("specs", nargs="*", help="spec files (default: tests/specs/optics_examples.yaml and validation/specs/optics_crosscheck.yaml)")
     ap.add_argument("--baker", help="use this baker binary instead of `cargo run --release -q -p baker --`")
     ap.add_argument("--show", type=int, default=20, help="failures to print in full (default 20)")
     args = ap.parse_args()

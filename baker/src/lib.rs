@@ -5,7 +5,9 @@
 //! MCML input files), [`cli`] (the commands behind the `baker` binary).
 
 pub mod cli;
+pub mod fit;
 pub mod output;
+pub mod profile;
 pub mod skin;
 pub mod spec;
 pub mod spectral;

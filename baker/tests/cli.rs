@@ -92,7 +92,7 @@ fn missing_spec_file_is_an_error() {
 
 #[test]
 fn validate_lists_every_entry_of_the_default_spec() {
-    let o = baker(&["validate", "specs/fitzpatrick.yaml"]);
+    let o = baker(&["validate", "tests/specs/optics_examples.yaml"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8(o.stdout).unwrap();
     assert!(out.contains("ok, 109 entries"), "{out}");
@@ -101,7 +101,7 @@ fn validate_lists_every_entry_of_the_default_spec() {
 
 #[test]
 fn optics_json_is_a_valid_document_with_named_layers() {
-    let o = baker(&["optics", "specs/fitzpatrick.yaml", "--json"]);
+    let o = baker(&["optics", "tests/specs/optics_examples.yaml", "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let doc = formats::OpticsDocument::from_json(std::str::from_utf8(&o.stdout).unwrap()).unwrap();
     assert_eq!(doc.lambda_nm.len(), 31);
@@ -134,7 +134,7 @@ fn optics_single_entry_csv_plot_and_mci() {
     );
     let o = baker(&[
         "optics",
-        "specs/fitzpatrick.yaml",
+        "tests/specs/optics_examples.yaml",
         "--entry",
         "fig35_female_type2_age30",
         "--csv",
@@ -188,7 +188,7 @@ fn optics_single_entry_csv_plot_and_mci() {
 fn mci_off_grid_wavelength_is_a_clear_error() {
     let o = baker(&[
         "optics",
-        "specs/fitzpatrick.yaml",
+        "tests/specs/optics_examples.yaml",
         "--entry",
         "fig35_female_type2_age30",
         "--mci",
@@ -200,7 +200,12 @@ fn mci_off_grid_wavelength_is_a_clear_error() {
 
 #[test]
 fn unknown_entry_lists_the_entries() {
-    let o = baker(&["optics", "specs/fitzpatrick.yaml", "--entry", "nobody"]);
+    let o = baker(&[
+        "optics",
+        "tests/specs/optics_examples.yaml",
+        "--entry",
+        "nobody",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("fig35_female_type2_age30"));
 }
@@ -209,12 +214,18 @@ fn unknown_entry_lists_the_entries() {
 fn bake_writes_the_optics_document_and_csvs_atomically() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
-    let o = baker(&["bake", "specs/fitzpatrick.yaml", "--out", out]);
+    let o = baker(&[
+        "bake",
+        "tests/specs/optics_examples.yaml",
+        "--optics-only",
+        "--out",
+        out,
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let json = std::fs::read_to_string(dir.path().join("fitzpatrick/optics.json")).unwrap();
+    let json = std::fs::read_to_string(dir.path().join("optics_examples/optics.json")).unwrap();
     let doc = formats::OpticsDocument::from_json(&json).unwrap();
     assert_eq!(doc.entries.len(), 109);
-    let csvs = std::fs::read_dir(dir.path().join("fitzpatrick/optics"))
+    let csvs = std::fs::read_dir(dir.path().join("optics_examples/optics"))
         .unwrap()
         .count();
     assert_eq!(csvs, 109);
@@ -231,7 +242,7 @@ fn bake_with_a_bad_spec_writes_nothing() {
     let out = dir.path().join("o");
     let o = baker(&[
         "bake",
-        "specs/fitzpatrick.yaml",
+        "tests/specs/optics_examples.yaml",
         "tests/specs/bad/typo.yaml",
         "--out",
         out.to_str().unwrap(),
@@ -312,7 +323,7 @@ fn mc_takes_a_skin_spec_entry_and_a_wavelength() {
     let v = json(&baker(&[
         "mc",
         "--spec",
-        "specs/fitzpatrick.yaml",
+        "tests/specs/optics_examples.yaml",
         "--entry",
         "fig35_female_type2_age30",
         "--lambda-nm",
@@ -418,7 +429,7 @@ fn mc_reads_mci_and_writes_mco() {
 fn issue4_closed_stdout_ends_quietly() {
     use std::process::Stdio;
     let mut child = Command::new(env!("CARGO_BIN_EXE_baker"))
-        .args(["optics", "specs/fitzpatrick.yaml"])
+        .args(["optics", "tests/specs/optics_examples.yaml"])
         .current_dir(repo())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

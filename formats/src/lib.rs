@@ -4,7 +4,9 @@
 //! to read what the baker writes. Each format documents its layout in its module.
 
 pub mod optics;
+pub mod table;
 
 pub use optics::{
     OpticsDocument, OpticsEntry, OpticsError, OpticsJunction, OpticsLayer, OpticsSurface,
 };
+pub use table::{Array, DType, Data, TableError, TableFile};

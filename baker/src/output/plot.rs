@@ -11,7 +11,7 @@ use formats::OpticsEntry;
 static FONT: Once = Once::new();
 
 /// DejaVu Sans (Bitstream Vera licence, see assets/fonts), embedded so plots need no system fonts.
-fn ensure_font() {
+pub(crate) fn ensure_font() {
     FONT.call_once(|| {
         let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
         if register_font("sans-serif", FontStyle::Normal, bytes).is_err() {

@@ -7,4 +7,4 @@ pub mod raw;
 pub mod resolve;
 
 pub use error::{SpecError, SpecErrors};
-pub use resolve::{load, load_str, ResolvedEntry, SkinSpec};
+pub use resolve::{load, load_str, ProfileSettings, ResolvedEntry, SkinSpec};

@@ -21,6 +21,27 @@ pub struct RawSpec {
     pub entries: Vec<Spanned<RawParams>>,
     #[serde(default)]
     pub sweeps: Vec<Spanned<RawParams>>,
+    /// How diffusion profiles are baked (photons, seed, radial grid, Gaussian count).
+    pub profiles: Option<Spanned<RawProfiles>>,
+}
+
+/// `profiles: {photons, seed, gaussians, radial: {dr_min_mm, growth, r_max_mm}}`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawProfiles {
+    pub photons: Option<Spanned<f64>>,
+    pub seed: Option<Spanned<f64>>,
+    pub gaussians: Option<Spanned<f64>>,
+    pub radial: Option<Spanned<RawRadial>>,
+}
+
+/// The radial grid of the profiles: fine bins of `dr_min_mm`, then geometric growth.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawRadial {
+    pub dr_min_mm: Option<Spanned<f64>>,
+    pub growth: Option<Spanned<f64>>,
+    pub r_max_mm: Option<Spanned<f64>>,
 }
 
 /// `wavelengths: {start_nm, stop_nm, step_nm}` or `wavelengths: {list_nm: [...]}`.

@@ -3,9 +3,11 @@
 //! Every table under `spectral/data/` is embedded in the binary at compile time (the baker
 //! reads no data files at run time) and starts with a header naming its source and units.
 
+pub mod colour;
 pub mod grid;
 pub mod table;
 
+pub use colour::ColourMap;
 pub use grid::WavelengthGrid;
 pub use table::{SpectralTable, TableError};
 

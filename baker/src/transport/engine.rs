@@ -31,6 +31,9 @@ pub struct McOptions {
     pub batch_size: u64,
     /// Draw a progress bar on stderr (shown only on a terminal).
     pub progress: bool,
+    /// Advance this bar (photons) instead of drawing one per run: a bake shows one bar over
+    /// all its simulations.
+    pub bar: Option<indicatif::ProgressBar>,
 }
 
 impl McOptions {
@@ -41,6 +44,7 @@ impl McOptions {
             threads: None,
             batch_size: 10_000,
             progress: false,
+            bar: None,
         }
     }
 }
@@ -429,29 +433,31 @@ impl Scorer for DirectScorer<'_> {
 /// at a time so memory stays bounded for any photon count.
 pub(crate) fn run_batches<T: Send>(
     chunk_per_thread: u64,
-    photons: u64,
-    batch_size: u64,
-    threads: Option<usize>,
-    progress: bool,
+    o: &McOptions,
     work: impl Fn(u64, u64) -> T + Sync,
     mut reduce: impl FnMut(T),
 ) -> anyhow::Result<usize> {
+    let (photons, batch_size) = (o.photons, o.batch_size.max(1));
     let n_batches = photons.div_ceil(batch_size);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
+        .num_threads(o.threads.unwrap_or(0))
         .build()?;
     let used = pool.current_num_threads();
-    let bar = if progress {
+    let bar = if let Some(b) = &o.bar {
+        b.clone()
+    } else if o.progress {
         indicatif::ProgressBar::new(photons)
     } else {
         indicatif::ProgressBar::hidden()
     };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} photons ({per_sec}, eta {eta})",
-        )
-        .expect("valid template"),
-    );
+    if o.bar.is_none() {
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} photons ({per_sec}, eta {eta})",
+            )
+            .expect("valid template"),
+        );
+    }
     let chunk = chunk_per_thread.max(1) * used as u64;
     let mut start = 0;
     while start < n_batches {
@@ -470,7 +476,9 @@ pub(crate) fn run_batches<T: Send>(
         outs.into_iter().for_each(&mut reduce);
         start = end;
     }
-    bar.finish_and_clear();
+    if o.bar.is_none() {
+        bar.finish_and_clear();
+    }
     Ok(used)
 }
 
@@ -483,10 +491,7 @@ pub fn run(stack: &Stack, o: &McOptions) -> anyhow::Result<McResult> {
     let mut total = Tally::new(nl, p.nr);
     let threads = run_batches(
         64,
-        o.photons,
-        o.batch_size.max(1),
-        o.threads,
-        o.progress,
+        o,
         |b, n| {
             let mut rng = batch_rng(o.seed, b);
             let mut t = Tally::new(nl, p.nr);

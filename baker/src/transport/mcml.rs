@@ -251,12 +251,13 @@ pub fn simulate_grid(run: &McmlRun, o: &McOptions) -> anyhow::Result<(McResult, 
     // Grids can be large (nr·nz values per batch): batches 10× larger than usual amortise
     // their allocation, and only a couple per thread are in flight. Still deterministic for a
     // given seed, whatever the thread count.
+    let o = &McOptions {
+        batch_size: o.batch_size.max(1) * 10,
+        ..o.clone()
+    };
     let threads = run_batches(
         2,
-        o.photons,
-        o.batch_size.max(1) * 10,
-        o.threads,
-        o.progress,
+        o,
         |b, n| {
             let mut rng = batch_rng(o.seed, b);
             let mut t = Tally::new(p.nl, p.nr);

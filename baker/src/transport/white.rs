@@ -9,9 +9,11 @@
 use std::time::Instant;
 
 use super::engine::{run_batches, trace, McOptions, Prepared, Scorer};
+use super::radial::RadialBins;
 use super::rng::batch_rng;
 use super::stack::{Stack, StackError, MAX_LAYERS};
 use super::tally::{McResult, Tally};
+use crate::stats::Sums;
 
 /// Per-layer absorption coefficients to apply to a white run, mm⁻¹.
 pub type AbsorptionSet = Vec<f64>;
@@ -109,10 +111,7 @@ pub fn run_white(stack: &Stack, mua_ref_per_mm: &[f64], o: &McOptions) -> anyhow
     };
     let threads = run_batches(
         64,
-        o.photons,
-        o.batch_size.max(1),
-        o.threads,
-        o.progress,
+        o,
         |b, n| {
             let mut rng = batch_rng(o.seed, b);
             let mut s = WhiteScorer::default();
@@ -169,4 +168,170 @@ impl WhiteRun {
         }
         McResult::from_tally(&t, self.rsp, self.dr_mm, self.threads, self.seconds)
     }
+}
+
+/// What one absorption set of [`run_white_sets`] scores: sums over photons, with Σx² for
+/// standard errors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SetTally {
+    /// Diffuse reflectance of scattered light, whole plane.
+    pub rd: Sums,
+    /// Light reflected back out by inner interfaces without scattering (a delta at r ≈ 0).
+    pub rd_unscattered: Sums,
+    pub tt: Sums,
+    /// Scattered reflectance per annulus of the run's [`RadialBins`] (weight, not per area).
+    pub rd_r: Vec<Sums>,
+}
+
+impl SetTally {
+    fn new(nr: usize) -> Self {
+        Self {
+            rd: Sums::default(),
+            rd_unscattered: Sums::default(),
+            tt: Sums::default(),
+            rd_r: vec![Sums::default(); nr],
+        }
+    }
+
+    fn merge(&mut self, o: &SetTally) {
+        self.rd.merge(&o.rd);
+        self.rd_unscattered.merge(&o.rd_unscattered);
+        self.tt.merge(&o.tt);
+        for (a, b) in self.rd_r.iter_mut().zip(&o.rd_r) {
+            a.merge(b);
+        }
+    }
+}
+
+/// One white simulation applied to many absorption sets at once.
+#[derive(Debug, Clone)]
+pub struct WhiteSets {
+    pub photons: u64,
+    /// Specular reflectance at the surface (not part of the tallies).
+    pub rsp: f64,
+    pub sets: Vec<SetTally>,
+    pub scattering_events: u64,
+    pub threads: usize,
+    pub seconds: f64,
+}
+
+struct SetsScorer<'a> {
+    mua: &'a [[f64; MAX_LAYERS]],
+    nl: usize,
+    bins: &'a RadialBins,
+    sets: Vec<SetTally>,
+    photons: u64,
+}
+
+impl Scorer for SetsScorer<'_> {
+    fn absorb(&mut self, _layer: usize, _dw: f64, _pos: &[f64; 3]) {}
+    fn escape(
+        &mut self,
+        top: bool,
+        scattered: bool,
+        weight: f64,
+        pos: &[f64; 3],
+        _cos_out: f64,
+        path: &[f64],
+    ) {
+        let bin = if top && scattered {
+            self.bins.index((pos[0] * pos[0] + pos[1] * pos[1]).sqrt())
+        } else {
+            None
+        };
+        for (t, mua) in self.sets.iter_mut().zip(self.mua) {
+            // Microscopic Beer–Lambert: the packet's weight under this set's absorption.
+            let tau: f64 = (0..self.nl).map(|i| path[i] * mua[i]).sum();
+            let w = weight * (-tau).exp();
+            match (top, scattered) {
+                (true, true) => {
+                    t.rd.add(w);
+                    if let Some(k) = bin {
+                        t.rd_r[k].add(w);
+                    }
+                }
+                (true, false) => t.rd_unscattered.add(w),
+                (false, _) => t.tt.add(w),
+            }
+        }
+    }
+    fn lost(&mut self, _weight: f64) {}
+    fn photon_done(&mut self) {
+        self.photons += 1;
+    }
+}
+
+/// Traces `stack`'s scattering once and scores every per-layer absorption set of `sets` on
+/// `bins`, streaming (no per-packet storage): the cost of a set is a few multiplications per
+/// escaping packet. Roulette plays against the per-layer minimum over `sets`, so no set loses
+/// packets it would have kept. Deterministic for a given seed whatever the thread count.
+pub fn run_white_sets(
+    stack: &Stack,
+    sets: &[AbsorptionSet],
+    bins: &RadialBins,
+    o: &McOptions,
+) -> anyhow::Result<WhiteSets> {
+    let p = Prepared::new(stack)?;
+    if sets.is_empty() {
+        anyhow::bail!("no absorption sets to apply");
+    }
+    let mut mua = vec![[0.0; MAX_LAYERS]; sets.len()];
+    let mut mua_ref = [f64::INFINITY; MAX_LAYERS];
+    for (s, set) in sets.iter().enumerate() {
+        if set.len() != p.nl {
+            anyhow::bail!(
+                "absorption set {s} has {} values for {} layers",
+                set.len(),
+                p.nl
+            );
+        }
+        for (i, &m) in set.iter().enumerate() {
+            if !(m.is_finite() && m >= 0.0) {
+                anyhow::bail!("absorption set {s}, layer {i}: μa must be finite and >= 0, got {m}");
+            }
+            mua[s][i] = m;
+            mua_ref[i] = mua_ref[i].min(m);
+        }
+    }
+    if stack.layers.last().unwrap().d_mm.is_infinite() && mua_ref[p.nl - 1] <= 0.0 {
+        anyhow::bail!("a semi-infinite last layer needs μa > 0 in every set of a white run");
+    }
+    let t0 = Instant::now();
+    let mut all = WhiteSets {
+        photons: 0,
+        rsp: p.rsp,
+        sets: vec![SetTally::new(bins.len()); sets.len()],
+        scattering_events: 0,
+        threads: 0,
+        seconds: 0.0,
+    };
+    let threads = run_batches(
+        16,
+        o,
+        |b, n| {
+            let mut rng = batch_rng(o.seed, b);
+            let mut s = SetsScorer {
+                mua: &mua,
+                nl: p.nl,
+                bins,
+                sets: vec![SetTally::new(bins.len()); sets.len()],
+                photons: 0,
+            };
+            let mut events = 0;
+            for _ in 0..n {
+                trace::<true, _>(&p, &mua_ref, &mut rng, &mut s, &mut events);
+            }
+            (s.photons, events, s.sets)
+        },
+        |(photons, events, sets)| {
+            all.photons += photons;
+            all.scattering_events += events;
+            for (a, b) in all.sets.iter_mut().zip(&sets) {
+                a.merge(b);
+            }
+        },
+    )?;
+    all.threads = threads;
+    all.seconds = t0.elapsed().as_secs_f64();
+    Ok(all)
 }

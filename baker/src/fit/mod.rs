@@ -1,0 +1,6 @@
+//! Fits of baked tables to the analytic forms renderers evaluate.
+
+pub mod gaussians;
+pub mod nnls;
+
+pub use gaussians::{fit_sum_of_gaussians, gaussian_energy, FitOptions, GaussianFit};

@@ -1,0 +1,77 @@
+//! RGB diffusion profiles as one OpenEXR image: one row per entry (in bake order), one column
+//! per radial bin. Channels `R`, `G`, `B`: linear sRGB Rd(r) in mm⁻² (float32, annulus
+//! averages); `r_mm`: the bin centre of each column (the same on every row). Header
+//! attributes: `entries` (JSON list of entry names, row order), `r_edges_mm` (JSON list),
+//! `units` = "mm^-2". ZIP compression, lossless.
+
+use std::path::Path;
+
+use anyhow::Context;
+use exr::prelude::*;
+
+use super::atomic;
+
+/// Writes `rows` (one [nr][3] profile per entry, all on the same `r_edges_mm`) to `path`.
+pub fn write(
+    path: &Path,
+    names: &[String],
+    r_edges_mm: &[f64],
+    rows: &[&[[f64; 3]]],
+) -> anyhow::Result<()> {
+    let nr = r_edges_mm.len() - 1;
+    anyhow::ensure!(!rows.is_empty(), "no profiles to write");
+    anyhow::ensure!(
+        rows.iter().all(|r| r.len() == nr),
+        "profiles on different grids"
+    );
+    let (w, h) = (nr, rows.len());
+    let channel = |c: usize| -> Vec<f32> {
+        rows.iter()
+            .flat_map(|r| r.iter().map(move |v| v[c] as f32))
+            .collect()
+    };
+    let centres: Vec<f32> = r_edges_mm
+        .windows(2)
+        .map(|e| (0.5 * (e[0] + e[1])) as f32)
+        .collect();
+    let r_mm: Vec<f32> = (0..h).flat_map(|_| centres.iter().copied()).collect();
+    let channels = AnyChannels::sort(smallvec::smallvec![
+        AnyChannel::new("R", FlatSamples::F32(channel(0))),
+        AnyChannel::new("G", FlatSamples::F32(channel(1))),
+        AnyChannel::new("B", FlatSamples::F32(channel(2))),
+        AnyChannel::new("r_mm", FlatSamples::F32(r_mm)),
+    ]);
+    let mut attrs = LayerAttributes::default();
+    attrs.comments = Some(Text::from(
+        "baker skin diffusion profiles: row = entry (see 'entries'), column = radial bin \
+         (see 'r_mm'); R,G,B = linear sRGB Rd(r) in mm^-2",
+    ));
+    attrs.other.insert(
+        Text::from("entries"),
+        AttributeValue::Text(Text::from(serde_json::to_string(names)?.as_str())),
+    );
+    attrs.other.insert(
+        Text::from("r_edges_mm"),
+        AttributeValue::Text(Text::from(serde_json::to_string(r_edges_mm)?.as_str())),
+    );
+    attrs.other.insert(
+        Text::from("units"),
+        AttributeValue::Text(Text::from("mm^-2")),
+    );
+    let layer = Layer::new(
+        (w, h),
+        attrs,
+        Encoding {
+            compression: Compression::ZIP16,
+            ..Encoding::default()
+        },
+        channels,
+    );
+    let mut buf = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .non_parallel()
+        .to_buffered(&mut buf)
+        .map_err(|e| anyhow::anyhow!("encoding {}: {e}", path.display()))?;
+    atomic::write(path, buf.get_ref()).with_context(|| format!("writing {}", path.display()))
+}

@@ -1,0 +1,140 @@
+//! HDF5 writer for [`Tables`]: one group per entry, f64 datasets (shuffle + deflate), `units`
+//! and `description` attributes, and HDF5 dimension scales (`r_mm`, `lambda_nm`) so h5py shows
+//! `ds.dims[i][0]`. Written to a temporary file and renamed: a reader never sees half a file.
+//! Creation times are not recorded, so equal tables give equal files.
+
+use std::ffi::CString;
+use std::path::Path;
+use std::str::FromStr;
+
+use anyhow::Context;
+use hdf5_metno as h5;
+use hdf5_metno::types::VarLenUnicode;
+use hdf5_metno_sys::h5i::hid_t;
+
+use super::tables::{Dataset, Tables};
+
+// The HDF5 high-level dimension-scale API (libhdf5_hl); hdf5-metno does not wrap it.
+extern "C" {
+    fn H5DSset_scale(dsid: hid_t, dimname: *const std::ffi::c_char) -> i32;
+    fn H5DSattach_scale(did: hid_t, dsid: hid_t, idx: std::ffi::c_uint) -> i32;
+}
+
+fn text_attr(loc: &h5::Location, name: &str, value: &str) -> anyhow::Result<()> {
+    let v = VarLenUnicode::from_str(value).map_err(|e| anyhow::anyhow!("attribute {name}: {e}"))?;
+    loc.new_attr::<VarLenUnicode>()
+        .create(name)?
+        .write_scalar(&v)?;
+    Ok(())
+}
+
+fn write_dataset(g: &h5::Group, d: &Dataset) -> anyhow::Result<h5::Dataset> {
+    let (parent, leaf) = match d.name.rsplit_once('/') {
+        Some((p, l)) => {
+            let pg = match g.group(p) {
+                Ok(x) => x,
+                Err(_) => g.create_group_builder().obj_track_times(false).create(p)?,
+            };
+            (pg, l)
+        }
+        None => (g.clone(), d.name.as_str()),
+    };
+    let ds = if d.shape.is_empty() {
+        let ds = parent
+            .new_dataset::<f64>()
+            .obj_track_times(false)
+            .shape(())
+            .create(leaf)?;
+        ds.write_scalar(&d.data[0])?;
+        ds
+    } else {
+        let b = parent
+            .new_dataset::<f64>()
+            .obj_track_times(false)
+            .shape(d.shape.clone());
+        let b = if d.data.len() >= 64 {
+            b.shuffle().deflate(6)
+        } else {
+            b
+        };
+        let ds = b.create(leaf)?;
+        ds.write_raw(&d.data[..])?;
+        ds
+    };
+    text_attr(&ds, "units", d.units)?;
+    text_attr(&ds, "description", d.description)?;
+    Ok(ds)
+}
+
+/// Writes `t` to `path` atomically.
+pub fn write(path: &Path, t: &Tables) -> anyhow::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir)?;
+    let name = path.file_name().context("HDF5 path has no file name")?;
+    let tmp = dir.join(format!(
+        ".{}.tmp-{}",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = write_to(&tmp, t).and_then(|()| {
+        std::fs::File::open(&tmp)?.sync_all()?;
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+fn write_to(path: &Path, t: &Tables) -> anyhow::Result<()> {
+    let f = h5::File::with_options()
+        .with_fcpl(|p| p.obj_track_times(false))
+        .create(path)?;
+    for (k, v) in &t.attrs {
+        text_attr(&f, k, v)?;
+    }
+    for grp in &t.groups {
+        let g = f
+            .create_group_builder()
+            .obj_track_times(false)
+            .create(grp.name.as_str())?;
+        for (k, v) in &grp.attrs {
+            text_attr(&g, k, v)?;
+        }
+        let mut written = Vec::new();
+        for d in &grp.datasets {
+            written.push((d, write_dataset(&g, d)?));
+        }
+        // Dimension scales: every dataset some dimension names becomes a scale, once.
+        let mut scales: Vec<&str> = written
+            .iter()
+            .flat_map(|(d, _)| d.dims.iter().flatten().copied())
+            .collect();
+        scales.sort_unstable();
+        scales.dedup();
+        for s in &scales {
+            let Some((_, sd)) = written.iter().find(|(d, _)| d.name == *s) else {
+                continue;
+            };
+            let label = CString::new(*s)?;
+            let rc = h5::sync::sync(|| unsafe { H5DSset_scale(sd.id(), label.as_ptr()) });
+            anyhow::ensure!(rc >= 0, "H5DSset_scale({s}) failed");
+        }
+        for (d, ds) in &written {
+            for (i, dim) in d.dims.iter().enumerate() {
+                let Some(s) = dim else { continue };
+                let Some((_, sd)) = written.iter().find(|(d, _)| d.name == *s) else {
+                    continue;
+                };
+                let rc = h5::sync::sync(|| unsafe { H5DSattach_scale(ds.id(), sd.id(), i as u32) });
+                anyhow::ensure!(rc >= 0, "H5DSattach_scale({}, {s}) failed", d.name);
+            }
+        }
+    }
+    f.close()?;
+    Ok(())
+}

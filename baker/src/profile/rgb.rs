@@ -1,0 +1,78 @@
+//! Spectral profile → linear sRGB profile, 99 % radii and the sum-of-Gaussians fit.
+
+use super::simulate::SpectralProfile;
+use crate::fit::{fit_sum_of_gaussians, FitOptions, GaussianFit};
+use crate::spectral::ColourMap;
+
+/// What a renderer loads for one entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RgbProfile {
+    /// CIE XYZ of the total diffuse reflectance (Y = 1 for a white diffuser).
+    pub xyz: [f64; 3],
+    /// Linear sRGB total diffuse reflectance (white diffuser = 1).
+    pub albedo_rgb: [f64; 3],
+    pub albedo_rgb_se: [f64; 3],
+    /// [nr] linear sRGB Rd(r), mm⁻², bin averages.
+    pub rd_rgb_per_mm2: Vec<[f64; 3]>,
+    pub rd_rgb_per_mm2_se: Vec<[f64; 3]>,
+    /// Radius holding 99 % of each channel's diffuse energy, mm; NaN when the grid ends first.
+    pub r99_mm: [f64; 3],
+    pub fit: GaussianFit,
+}
+
+/// Radius where the cumulative energy of `rd` (per unit area, on annuli `edges_mm`) first
+/// reaches `target`, interpolating the cumulative linearly in r inside the bin; NaN if never.
+pub fn radius_of_energy(edges_mm: &[f64], rd: impl Iterator<Item = f64>, target: f64) -> f64 {
+    let mut cum = 0.0;
+    for (k, v) in rd.enumerate() {
+        let (a, b) = (edges_mm[k], edges_mm[k + 1]);
+        let e = v * std::f64::consts::PI * (b * b - a * a);
+        if cum + e >= target && e > 0.0 {
+            return a + (b - a) * ((target - cum) / e).clamp(0.0, 1.0);
+        }
+        cum += e;
+    }
+    f64::NAN
+}
+
+pub fn rgb_profile(p: &SpectralProfile, colour: &ColourMap, gaussians: usize) -> RgbProfile {
+    let nr = p.r_edges_mm.len() - 1;
+    let w = &colour.rgb_weights;
+    let rd_rgb: Vec<[f64; 3]> = (0..nr)
+        .map(|k| std::array::from_fn(|c| (0..w.len()).map(|i| w[i][c] * p.rd_per_mm2[i][k]).sum()))
+        .collect();
+    let rd_rgb_se: Vec<[f64; 3]> = (0..nr)
+        .map(|k| {
+            let se: Vec<f64> = (0..w.len()).map(|i| p.rd_per_mm2_se[i][k]).collect();
+            colour.rgb_se(&se)
+        })
+        .collect();
+    let albedo_rgb = colour.rgb(&p.rd_total);
+    let r99_mm: [f64; 3] = std::array::from_fn(|c| {
+        radius_of_energy(
+            &p.r_edges_mm,
+            rd_rgb.iter().map(|v| v[c]),
+            0.99 * albedo_rgb[c],
+        )
+    });
+    // Where the grid ends before 99 %, fit what there is (the bake warns).
+    let r_fit = r99_mm.map(|r| if r.is_nan() { f64::INFINITY } else { r });
+    let fit = fit_sum_of_gaussians(
+        &p.r_edges_mm,
+        &rd_rgb,
+        r_fit,
+        &FitOptions {
+            count: gaussians,
+            ..FitOptions::default()
+        },
+    );
+    RgbProfile {
+        xyz: colour.xyz(&p.rd_total),
+        albedo_rgb,
+        albedo_rgb_se: colour.rgb_se(&p.rd_total_se),
+        rd_rgb_per_mm2: rd_rgb,
+        rd_rgb_per_mm2_se: rd_rgb_se,
+        r99_mm,
+        fit,
+    }
+}

@@ -1,0 +1,206 @@
+//! Grouping entries by shared scattering, and running one white simulation per group and
+//! wavelength.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use formats::OpticsEntry;
+
+use crate::transport::{self, run_white_sets, McOptions, RadialBins, Stack};
+
+/// Spectral profile of one entry: per wavelength, Rd(r) per unit area on the radial bins and
+/// the whole-plane totals, each with its standard error.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpectralProfile {
+    pub lambda_nm: Vec<f64>,
+    pub r_edges_mm: Vec<f64>,
+    /// [nλ][nr], mm⁻².
+    pub rd_per_mm2: Vec<Vec<f64>>,
+    pub rd_per_mm2_se: Vec<Vec<f64>>,
+    /// Diffuse reflectance of scattered light over the whole plane, [nλ].
+    pub rd_total: Vec<f64>,
+    pub rd_total_se: Vec<f64>,
+    /// Light sent back by inner interfaces without scattering (a delta at r ≈ 0), [nλ].
+    pub rd_unscattered: Vec<f64>,
+    pub tt: Vec<f64>,
+    pub tt_se: Vec<f64>,
+    /// Specular reflectance of the air–stratum corneum interface, [nλ].
+    pub rsp: Vec<f64>,
+    /// Photons traced per wavelength.
+    pub photons: u64,
+    /// Index of the simulation group the entry belongs to.
+    pub group: usize,
+}
+
+/// Which entries share a simulation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// Entry indices per group, in entry order; groups in order of their first entry.
+    pub groups: Vec<Vec<usize>>,
+    /// Per group, a 64-bit digest of its scattering stacks (seeds derive from it).
+    pub digests: Vec<u64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct SimOptions {
+    pub photons: u64,
+    pub seed: u64,
+    pub threads: Option<usize>,
+    /// Share simulations between entries that differ only in absorption (default). Off: one
+    /// simulation per entry, for measuring what sharing saves.
+    pub reuse: bool,
+    pub bar: Option<indicatif::ProgressBar>,
+}
+
+/// SplitMix64 finaliser (Steele, Lea & Flood 2014): a well-mixed 64-bit digest step.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+fn digest(words: &[u64]) -> u64 {
+    words
+        .iter()
+        .fold(0x9e37_79b9_7f4a_7c15, |h, &w| mix(h ^ mix(w)))
+}
+
+/// Everything of entry `e`'s stacks except absorption, as bits: equal keys ⇔ the same
+/// scattering simulation at every wavelength.
+fn scattering_key(e: &OpticsEntry, n_lambda: usize) -> Vec<u64> {
+    let mut k = Vec::new();
+    for i in 0..n_lambda {
+        let s = transport::stack::from_skin(e, i);
+        k.push(s.n_above.to_bits());
+        k.push(s.n_below.to_bits());
+        for l in &s.layers {
+            k.extend([
+                l.d_mm.to_bits(),
+                l.eta.to_bits(),
+                l.mus_per_mm.to_bits(),
+                l.g.to_bits(),
+            ]);
+        }
+        match &s.junction {
+            Some(j) => k.extend([
+                j.upper_layer as u64,
+                j.amplitude_mm.to_bits(),
+                j.omega_x_per_mm.to_bits(),
+                j.omega_y_per_mm.to_bits(),
+                j.phi_x_rad.to_bits(),
+                j.phi_y_rad.to_bits(),
+            ]),
+            None => k.push(u64::MAX),
+        }
+    }
+    k
+}
+
+/// Groups `entries` by shared scattering (or one group each without `reuse`).
+pub fn plan(entries: &[OpticsEntry], n_lambda: usize, reuse: bool) -> Plan {
+    let mut index: HashMap<Vec<u64>, usize> = HashMap::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut digests = Vec::new();
+    for (i, e) in entries.iter().enumerate() {
+        let key = scattering_key(e, n_lambda);
+        let d = digest(&key);
+        let g = if reuse {
+            *index.entry(key).or_insert_with(|| {
+                groups.push(Vec::new());
+                digests.push(d);
+                groups.len() - 1
+            })
+        } else {
+            groups.push(Vec::new());
+            // Without sharing, an entry's own absorption is part of what it simulates.
+            digests.push(digest(&[d, digest(&absorption_bits(e))]));
+            groups.len() - 1
+        };
+        groups[g].push(i);
+    }
+    Plan { groups, digests }
+}
+
+fn absorption_bits(e: &OpticsEntry) -> Vec<u64> {
+    e.layers
+        .iter()
+        .flat_map(|l| l.mua_per_mm.iter().map(|m| m.to_bits()))
+        .collect()
+}
+
+/// Seed of the simulation of group digest `d` at wavelength index `i`: depends on the spec
+/// seed and what is simulated, not on which other entries are in the bake.
+pub fn task_seed(seed: u64, d: u64, i: usize) -> u64 {
+    digest(&[seed, d, i as u64])
+}
+
+/// Runs every group of `plan` at every wavelength; `on_task(done, total, seconds)` after each.
+pub fn simulate(
+    entries: &[OpticsEntry],
+    lambda_nm: &[f64],
+    bins: &RadialBins,
+    plan: &Plan,
+    o: &SimOptions,
+    mut on_task: impl FnMut(usize, usize, f64),
+) -> anyhow::Result<Vec<SpectralProfile>> {
+    let nl = lambda_nm.len();
+    let nr = bins.len();
+    let areas = bins.areas_mm2();
+    let mut out: Vec<SpectralProfile> = entries
+        .iter()
+        .map(|_| SpectralProfile {
+            lambda_nm: lambda_nm.to_vec(),
+            r_edges_mm: bins.edges_mm().to_vec(),
+            rd_per_mm2: vec![vec![0.0; nr]; nl],
+            rd_per_mm2_se: vec![vec![0.0; nr]; nl],
+            rd_total: vec![0.0; nl],
+            rd_total_se: vec![0.0; nl],
+            rd_unscattered: vec![0.0; nl],
+            tt: vec![0.0; nl],
+            tt_se: vec![0.0; nl],
+            rsp: vec![0.0; nl],
+            photons: o.photons,
+            group: 0,
+        })
+        .collect();
+    let total = plan.groups.len() * nl;
+    let mut done = 0;
+    for (g, members) in plan.groups.iter().enumerate() {
+        for i in 0..nl {
+            let t0 = Instant::now();
+            let stack: Stack = transport::stack::from_skin(&entries[members[0]], i);
+            let sets: Vec<Vec<f64>> = members
+                .iter()
+                .map(|&m| entries[m].layers.iter().map(|l| l.mua_per_mm[i]).collect())
+                .collect();
+            let mut mo = McOptions::new(o.photons, task_seed(o.seed, plan.digests[g], i));
+            mo.threads = o.threads;
+            mo.bar = o.bar.clone();
+            let run = run_white_sets(&stack, &sets, bins, &mo).map_err(|err| {
+                anyhow::anyhow!(
+                    "entry {} at {} nm: {err}",
+                    entries[members[0]].name,
+                    lambda_nm[i]
+                )
+            })?;
+            let n = run.photons;
+            for (&m, t) in members.iter().zip(&run.sets) {
+                let p = &mut out[m];
+                p.group = g;
+                p.rsp[i] = run.rsp;
+                p.rd_total[i] = t.rd.mean(n);
+                p.rd_total_se[i] = t.rd.se(n);
+                p.rd_unscattered[i] = t.rd_unscattered.mean(n);
+                p.tt[i] = t.tt.mean(n);
+                p.tt_se[i] = t.tt.se(n);
+                for k in 0..nr {
+                    p.rd_per_mm2[i][k] = t.rd_r[k].mean(n) / areas[k];
+                    p.rd_per_mm2_se[i][k] = t.rd_r[k].se(n) / areas[k];
+                }
+            }
+            done += 1;
+            on_task(done, total, t0.elapsed().as_secs_f64());
+        }
+    }
+    Ok(out)
+}

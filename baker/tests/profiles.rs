@@ -1,0 +1,327 @@
+//! Diffusion profiles (thesis §3.5): the trends of Figs. 37–41, absorption reuse against
+//! separate simulations, and the `bake` products (byte-identical for any thread count).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use baker::profile::{self, RgbProfile, SimOptions, SpectralProfile};
+use baker::spec::load_str;
+use baker::spectral::ColourMap;
+use baker::transport::RadialBins;
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn baker(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_baker"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .expect("baker runs")
+}
+
+struct Baked {
+    names: Vec<String>,
+    spectral: Vec<SpectralProfile>,
+    rgb: Vec<RgbProfile>,
+}
+
+/// Bakes every entry of `yaml` in memory, with `reuse` as asked.
+fn bake(yaml: &str, photons: u64, reuse: bool) -> Baked {
+    let spec = load_str("test.yaml", yaml).unwrap();
+    let lam = spec.wavelengths.lambda_nm();
+    let entries: Vec<formats::OpticsEntry> = spec
+        .entries
+        .iter()
+        .map(|e| {
+            let o = baker::skin::evaluate(&e.params, &spec.wavelengths).unwrap();
+            baker::output::document::entry(e, &o)
+        })
+        .collect();
+    let bins = RadialBins::fine_then_log(0.01, 1.1, 40.0);
+    let plan = profile::plan(&entries, lam.len(), reuse);
+    let o = SimOptions {
+        photons,
+        seed: 11,
+        threads: None,
+        reuse,
+        bar: None,
+    };
+    let spectral = profile::simulate(&entries, lam, &bins, &plan, &o, |_, _, _| {}).unwrap();
+    let colour = ColourMap::new(lam);
+    let rgb = spectral
+        .iter()
+        .map(|p| profile::rgb_profile(p, &colour, 6))
+        .collect();
+    Baked {
+        names: entries.iter().map(|e| e.name.clone()).collect(),
+        spectral,
+        rgb,
+    }
+}
+
+impl Baked {
+    fn get(&self, name: &str) -> (&SpectralProfile, &RgbProfile) {
+        let k = self.names.iter().position(|n| n == name).unwrap();
+        (&self.spectral[k], &self.rgb[k])
+    }
+}
+
+/// Energy-weighted mean radius of channel `c`, mm (a width of the profile).
+fn mean_radius(p: &SpectralProfile, r: &RgbProfile, c: usize) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (k, v) in r.rd_rgb_per_mm2.iter().enumerate() {
+        let (a, b) = (p.r_edges_mm[k], p.r_edges_mm[k + 1]);
+        let e = v[c] * std::f64::consts::PI * (b * b - a * a);
+        num += e * 0.5 * (a + b);
+        den += e;
+    }
+    num / den
+}
+
+const TRENDS: &str = r#"
+version: 1
+wavelengths: {start_nm: 400, stop_nm: 700, step_nm: 25}
+defaults: {model: five_layer, gender: female, location: forearm, xi: 0.5}
+sweeps:
+  - name: "t{skin_type}_a{age}"
+    skin_type: [I, II, III, IV, V, VI]
+    age: [30, 80]
+"#;
+
+/// `a` exceeds `b` by more than four standard errors of the difference.
+#[track_caller]
+fn clearly_above(a: f64, a_se: f64, b: f64, b_se: f64, what: &str) {
+    let z = (a - b) / (a_se * a_se + b_se * b_se).sqrt();
+    assert!(z > 4.0, "{what}: {a} vs {b} (z = {z:.1})");
+}
+
+#[test]
+fn trends_of_figures_37_to_41() {
+    let b = bake(TRENDS, 40_000, true);
+    // Two simulation groups (one per age) serve the twelve entries.
+    assert_eq!(b.spectral.iter().map(|p| p.group).max(), Some(1));
+    let types = ["I", "II", "III", "IV", "V", "VI"];
+    for age in [30, 80] {
+        // Type I → VI: more melanin, monotonically darker in every channel.
+        for w in types.windows(2) {
+            let (_, lighter) = b.get(&format!("t{}_a{age}", w[0]));
+            let (_, darker) = b.get(&format!("t{}_a{age}", w[1]));
+            for c in 0..3 {
+                clearly_above(
+                    lighter.albedo_rgb[c],
+                    lighter.albedo_rgb_se[c],
+                    darker.albedo_rgb[c],
+                    darker.albedo_rgb_se[c],
+                    &format!("age {age}, type {} vs {} channel {c}", w[0], w[1]),
+                );
+            }
+        }
+    }
+    for t in types {
+        // Older skin: higher albedo (less melanin and blood) and wider profiles (thinner,
+        // less absorbing layers let light travel further: more translucent).
+        let (p30, young) = b.get(&format!("t{t}_a30"));
+        let (p80, old) = b.get(&format!("t{t}_a80"));
+        for c in 0..3 {
+            clearly_above(
+                old.albedo_rgb[c],
+                old.albedo_rgb_se[c],
+                young.albedo_rgb[c],
+                young.albedo_rgb_se[c],
+                &format!("type {t} channel {c}: albedo at 80 vs 30"),
+            );
+        }
+        for c in 0..2 {
+            let (w80, w30) = (mean_radius(p80, old, c), mean_radius(p30, young, c));
+            assert!(
+                w80 > 1.05 * w30,
+                "type {t} channel {c}: mean radius {w80} at 80 vs {w30} at 30"
+            );
+        }
+    }
+}
+
+#[test]
+fn absorption_reuse_agrees_with_one_simulation_per_entry() {
+    let yaml = r#"
+version: 1
+wavelengths: {list_nm: [420, 560, 680]}
+defaults: {model: five_layer, gender: male, location: face, age: 55}
+sweeps:
+  - name: "t{skin_type}_xi{xi}"
+    skin_type: [II, V]
+    xi: [0, 1]
+"#;
+    let shared = bake(yaml, 30_000, true);
+    let separate = bake(yaml, 30_000, false);
+    assert!(shared.spectral.iter().all(|p| p.group == 0));
+    assert_eq!(separate.spectral.iter().map(|p| p.group).max(), Some(3));
+    let mut worst = 0.0f64;
+    for (a, b) in shared.spectral.iter().zip(&separate.spectral) {
+        for i in 0..3 {
+            let z = (a.rd_total[i] - b.rd_total[i])
+                / (a.rd_total_se[i].powi(2) + b.rd_total_se[i].powi(2)).sqrt();
+            worst = worst.max(z.abs());
+            let zt =
+                (a.tt[i] - b.tt[i]) / (a.tt_se[i].powi(2) + b.tt_se[i].powi(2)).sqrt().max(1e-300);
+            assert!(zt.abs() < 4.5 || a.tt[i] < 1e-9, "Tt z = {zt}");
+        }
+    }
+    // 12 independent comparisons: |z| < 4.5 fails by chance with probability < 1e-4.
+    assert!(worst < 4.5, "worst |z| = {worst}");
+}
+
+#[test]
+fn the_profile_integrates_to_the_total_inside_the_grid() {
+    let b = bake(
+        "version: 1\nwavelengths: {list_nm: [600]}\nentries:\n  - {name: e, age: 40, gender: female, location: forearm, skin_type: III, xi: 0, model: five_layer}\n",
+        20_000,
+        true,
+    );
+    let p = &b.spectral[0];
+    let binned: f64 = p.rd_per_mm2[0]
+        .iter()
+        .enumerate()
+        .map(|(k, v)| {
+            v * std::f64::consts::PI * (p.r_edges_mm[k + 1].powi(2) - p.r_edges_mm[k].powi(2))
+        })
+        .sum();
+    // 40 mm holds everything but a vanishing tail.
+    assert!(
+        (binned - p.rd_total[0]).abs() <= 1e-3 * p.rd_total[0],
+        "{binned} vs {}",
+        p.rd_total[0]
+    );
+    let r = &b.rgb[0];
+    assert!(
+        r.r99_mm.iter().all(|v| v.is_finite() && *v < 40.0),
+        "{:?}",
+        r.r99_mm
+    );
+}
+
+fn read(p: &Path) -> Vec<u8> {
+    std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+#[test]
+fn bake_writes_every_product_identically_for_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |sub: &str, threads: &str| {
+        let out = dir.path().join(sub);
+        let o = baker(&[
+            "bake",
+            "tests/specs/profiles_small.yaml",
+            "--photons",
+            "3000",
+            "--threads",
+            threads,
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.stderr.is_empty(),
+            "--quiet prints nothing: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        out.join("profiles_small")
+    };
+    let a = run("a", "1");
+    let b = run("b", "2");
+    for f in [
+        "profiles.bkt",
+        "profiles_rgb.exr",
+        "optics.json",
+        "manifest.json",
+    ] {
+        assert!(
+            read(&a.join(f)) == read(&b.join(f)),
+            "{f} differs between 1 and 2 threads"
+        );
+    }
+    let t = formats::table::TableFile::read(a.join("profiles.bkt")).unwrap();
+    let nr = t.get("typeI_age30_xi0/r_mm").unwrap().shape[0];
+    assert!(nr > 50);
+    assert_eq!(
+        t.get("typeI_age30_xi0/rd_rgb_per_mm2").unwrap().shape,
+        vec![nr, 3]
+    );
+    assert_eq!(
+        t.get("typeVI_age80_xi1/rd_spectral_per_mm2").unwrap().shape,
+        vec![7, nr]
+    );
+    assert_eq!(
+        t.get("typeI_age30_xi0/gaussians/weight_rgb").unwrap().shape,
+        vec![6, 3]
+    );
+    assert_eq!(
+        t.get("typeI_age30_xi0/rd_rgb_per_mm2")
+            .unwrap()
+            .attr("units"),
+        Some("mm^-2")
+    );
+    assert!(read(&a.join("profiles.h5")).starts_with(b"\x89HDF\r\n\x1a\n"));
+    let m: serde_json::Value = serde_json::from_slice(&read(&a.join("manifest.json"))).unwrap();
+    assert_eq!(m["entries"].as_array().unwrap().len(), 8);
+    for f in m["files"].as_array().unwrap() {
+        let bytes = read(&a.join(f["path"].as_str().unwrap()));
+        assert_eq!(bytes.len() as u64, f["bytes"].as_u64().unwrap());
+    }
+    assert!(a.join("preview/profiles/typeVI_age80_xi1.png").exists());
+    let sheets = std::fs::read_dir(a.join("preview"))
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().starts_with("contact_sheet"))
+        .count();
+    assert_eq!(sheets, 2, "one contact sheet per ξ");
+}
+
+#[test]
+fn bake_subset_and_unknown_entry() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let o = baker(&[
+        "bake",
+        "tests/specs/profiles_small.yaml",
+        "--entry",
+        "nobody",
+        "--out",
+        out,
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no entry named \"nobody\""));
+    let o = baker(&[
+        "bake",
+        "tests/specs/profiles_small.yaml",
+        "--entry",
+        "typeI_age30_xi0",
+        "--photons",
+        "2000",
+        "--out",
+        out,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let t =
+        formats::table::TableFile::read(dir.path().join("profiles_small/profiles.bkt")).unwrap();
+    assert!(t.get("typeI_age30_xi0/albedo_rgb").is_some());
+    assert!(t.get("typeVI_age80_xi1/albedo_rgb").is_none());
+}
+
+#[test]
+fn profile_settings_are_range_checked_with_their_location() {
+    let text = "version: 1\nprofiles:\n  photons: 0\n  gaussians: 40\n  radial: {growth: 3}\nentries: []\n";
+    let e = load_str("p.yaml", text).unwrap_err().to_string();
+    assert!(
+        e.contains("p.yaml:3:12") && e.contains("profiles.photons"),
+        "{e}"
+    );
+    assert!(e.contains("p.yaml:4:14") && e.contains("[1, 16]"), "{e}");
+    assert!(
+        e.contains("profiles.radial.growth") && e.contains("[1.001, 2]"),
+        "{e}"
+    );
+}
