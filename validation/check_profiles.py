@@ -460,8 +460,9 @@ def check_rerun(bk: Bake, d: Path, bake_fn) -> tuple[str, list[str]]:
     with tempfile.TemporaryDirectory(prefix="check_profiles_rerun_") as tmp:
         d2 = bake_fn(Path(tmp))
         fails = []
-        if (d / "profiles.bkt").read_bytes() != (d2 / "profiles.bkt").read_bytes():
-            fails.append("profiles.bkt differs byte-wise between the two runs")
+        for f in ("profiles.bkt", "profiles_rgb.exr", "manifest.json"):
+            if (d / f).exists() and (d / f).read_bytes() != (d2 / f).read_bytes():
+                fails.append(f"{f} differs byte-wise between the two runs")
         bk2 = Bake(d2 / "profiles.h5")
         for name in sorted(set(bk.data) | set(bk2.data)):
             a, b = bk.data.get(name), bk2.data.get(name)

@@ -1,23 +1,11 @@
 //! End-to-end tests of the `baker` binary: spec errors, `optics` outputs, `bake`.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn baker(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_baker"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("baker runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).to_string()
-}
+use common::{baker, repo, stderr};
 
 /// A bad spec exits non-zero and names file:line:column, the field and the allowed values.
 #[track_caller]

@@ -170,6 +170,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         seed: settings.seed,
         threads: a.threads,
         reuse: !a.no_reuse,
+        max_boost: settings.max_photon_boost,
         bar: bar.clone(),
     };
     let t_sim = Instant::now();
@@ -217,8 +218,9 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
     }
 
     // Tables.
-    let mut t = tables::Tables {
-        attrs: vec![
+    let mut t =
+        tables::Tables {
+            attrs: vec![
             ("format".into(), tables::FORMAT.into()),
             ("format_version".into(), tables::FORMAT_VERSION.to_string()),
             ("spec_file".into(), spec.file.clone()),
@@ -226,6 +228,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
             ("photons".into(), photons.to_string()),
             ("seed".into(), settings.seed.to_string()),
             ("gaussians".into(), settings.gaussians.to_string()),
+            ("max_photon_boost".into(), settings.max_photon_boost.to_string()),
             ("absorption_reuse".into(), (!a.no_reuse).to_string()),
             (
                 "entries".into(),
@@ -238,8 +241,8 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
                     .into(),
             ),
         ],
-        groups: vec![tables::colour_group(&colour)],
-    };
+            groups: vec![tables::colour_group(&colour)],
+        };
     for ((e, p), r) in entries.iter().zip(&spectral).zip(&rgb) {
         t.groups
             .push(tables::entry_group(e, entry_attrs(e, p), p, r));
@@ -324,6 +327,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
             "photons": photons,
             "seed": settings.seed,
             "gaussians": settings.gaussians,
+            "max_photon_boost": settings.max_photon_boost,
             "radial": {
                 "dr_min_mm": settings.dr_min_mm,
                 "growth": settings.growth,
@@ -350,7 +354,6 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
             &spectral,
             &rgb,
             &plan,
-            photons,
             sim_seconds,
             fit_seconds,
             t0,
@@ -431,13 +434,16 @@ fn summary(
     spectral: &[SpectralProfile],
     rgb: &[RgbProfile],
     plan: &profile::Plan,
-    photons: u64,
     sim_seconds: f64,
     fit_seconds: f64,
     t0: Instant,
 ) {
     let n_sims = plan.groups.len() * spectral.first().map_or(0, |p| p.lambda_nm.len());
-    let total_photons = n_sims as f64 * photons as f64;
+    let total_photons: f64 = plan
+        .groups
+        .iter()
+        .map(|g| spectral[g[0]].photons.iter().sum::<u64>() as f64)
+        .sum();
     eprintln!(
         "baked {}: {} entries, {n_sims} simulations, {:.3e} photons in {sim_seconds:.1} s ({:.0} photons/s), fits {fit_seconds:.1} s → {} ({:.1} s)",
         path.display(),

@@ -43,12 +43,17 @@ pub struct McArgs {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     pub json: bool,
+    /// With a junction, enter each packet at a random point of the junction's period cell and
+    /// measure radii from there (the profile averaged over entry points, as `bake` does).
+    #[arg(long)]
+    pub random_entry: bool,
 }
 
 pub fn run(a: McArgs) -> anyhow::Result<()> {
     let mut o = McOptions::new(a.photons.unwrap_or(1_000_000), a.seed);
     o.threads = a.threads;
     o.progress = !a.json;
+    o.random_entry = a.random_entry;
     if a.photons == Some(0) {
         return Err(UsageError("--photons must be at least 1".into()).into());
     }

@@ -237,6 +237,29 @@ fn nelder_mead(
     simplex.swap_remove(0)
 }
 
+/// Phase 1 on the smooth least-squares surrogate, phase 2 on the L1 error itself, from `x0`.
+fn optimise(p: &Problem, x0: &[f64], o: &FitOptions) -> (Vec<f64>, f64) {
+    let f2 = |x: &[f64]| p.evaluate_l2(x);
+    let (mut x, _) = nelder_mead(&f2, x0, 0.7, o.max_evaluations);
+    for _ in 0..o.restarts {
+        x = nelder_mead(&f2, &x, 0.3, o.max_evaluations).0;
+    }
+    let f = |x: &[f64]| p.evaluate(x).0;
+    let (mut x, mut fx) = nelder_mead(&f, &x, 0.3, o.max_evaluations);
+    for k in 0..o.restarts {
+        let step = if k % 2 == 0 { 0.3 } else { 0.8 };
+        let (x2, f2) = nelder_mead(&f, &x, step, o.max_evaluations);
+        let improved = f2 < fx * (1.0 - 1e-4);
+        if f2 < fx {
+            (x, fx) = (x2, f2);
+        }
+        if !improved && k > 0 {
+            break;
+        }
+    }
+    (x, fx)
+}
+
 /// Fits `table` (bin averages per unit area, [nr][3], on annuli `edges_mm`) inside each
 /// channel's 99 % radius `r99_mm`, with `o.count` shared variances.
 pub fn fit_sum_of_gaussians(
@@ -265,7 +288,9 @@ pub fn fit_sum_of_gaussians(
         .collect();
     let p = Problem { edges_mm, channels };
     // Start: variances spread log-uniformly from the first bin's scale to the widest
-    // channel's 99 % radius (r99 ≈ 3σ for a single Gaussian).
+    // channel's 99 % radius (r99 ≈ 3σ for a single Gaussian). Starting from narrower or wider
+    // ladders, or weighting the channels by their aims, was tried on the Fitzpatrick profiles:
+    // the same optimum, or a worse red channel.
     let r_lo = edges_mm[1].max(1e-6);
     let r_hi = r99_mm
         .iter()
@@ -283,25 +308,7 @@ pub fn fit_sum_of_gaussians(
             }
         })
         .collect();
-    // Phase 1 on the smooth least-squares surrogate, phase 2 on the L1 error itself.
-    let f2 = |x: &[f64]| p.evaluate_l2(x);
-    let (mut x, _) = nelder_mead(&f2, &x0, 0.7, o.max_evaluations);
-    for _ in 0..o.restarts {
-        x = nelder_mead(&f2, &x, 0.3, o.max_evaluations).0;
-    }
-    let f = |x: &[f64]| p.evaluate(x).0;
-    let (mut x, mut fx) = nelder_mead(&f, &x, 0.3, o.max_evaluations);
-    for k in 0..o.restarts {
-        let step = if k % 2 == 0 { 0.3 } else { 0.8 };
-        let (x2, f2) = nelder_mead(&f, &x, step, o.max_evaluations);
-        let improved = f2 < fx * (1.0 - 1e-4);
-        if f2 < fx {
-            (x, fx) = (x2, f2);
-        }
-        if !improved && k > 0 {
-            break;
-        }
-    }
+    let (x, _) = optimise(&p, &x0, o);
     let (_, ws, errs) = p.evaluate(&x);
     let mut order: Vec<usize> = (0..o.count).collect();
     order.sort_by(|&a, &b| x[a].total_cmp(&x[b]));

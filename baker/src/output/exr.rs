@@ -1,8 +1,10 @@
 //! RGB diffusion profiles as one OpenEXR image: one row per entry (in bake order), one column
 //! per radial bin. Channels `R`, `G`, `B`: linear sRGB Rd(r) in mm⁻² (float32, annulus
 //! averages); `r_mm`: the bin centre of each column (the same on every row). Header
-//! attributes: `entries` (JSON list of entry names, row order), `r_edges_mm` (JSON list),
-//! `units` = "mm^-2". ZIP compression, lossless.
+//! attribute: `entries` (JSON list of entry names, row order); the bin edges are in the HDF5
+//! and `.bkt` files. Scan lines in increasing order, ZIP compression (lossless). The same
+//! profiles give the same bytes: the exr crate keeps custom attributes in a hash map, so the
+//! header holds exactly one.
 
 use std::path::Path;
 
@@ -46,29 +48,23 @@ pub fn write(
         "baker skin diffusion profiles: row = entry (see 'entries'), column = radial bin \
          (see 'r_mm'); R,G,B = linear sRGB Rd(r) in mm^-2",
     ));
-    attrs.other.insert(
-        Text::from("entries"),
-        AttributeValue::Text(Text::from(serde_json::to_string(names)?.as_str())),
-    );
-    attrs.other.insert(
-        Text::from("r_edges_mm"),
-        AttributeValue::Text(Text::from(serde_json::to_string(r_edges_mm)?.as_str())),
-    );
-    attrs.other.insert(
-        Text::from("units"),
-        AttributeValue::Text(Text::from("mm^-2")),
-    );
     let layer = Layer::new(
         (w, h),
         attrs,
         Encoding {
             compression: Compression::ZIP16,
-            ..Encoding::default()
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
         },
         channels,
     );
+    let mut image = Image::from_layer(layer);
+    image.attributes.other.insert(
+        Text::from("entries"),
+        AttributeValue::Text(Text::from(serde_json::to_string(names)?.as_str())),
+    );
     let mut buf = std::io::Cursor::new(Vec::new());
-    Image::from_layer(layer)
+    image
         .write()
         .non_parallel()
         .to_buffered(&mut buf)

@@ -165,6 +165,14 @@ pub fn entry_group(
             lr(),
         ),
         ds(
+            "photons_spectral",
+            vec![nl],
+            p.photons.iter().map(|&n| n as f64).collect(),
+            "1",
+            "photon packets traced per wavelength (the spec's count, raised where packets are cheap)",
+            vec![Some("lambda_nm")],
+        ),
+        ds(
             "rd_total_spectral",
             vec![nl],
             p.rd_total.clone(),

@@ -27,7 +27,7 @@ pub struct SpectralProfile {
     /// Specular reflectance of the air–stratum corneum interface, [nλ].
     pub rsp: Vec<f64>,
     /// Photons traced per wavelength.
-    pub photons: u64,
+    pub photons: Vec<u64>,
     /// Index of the simulation group the entry belongs to.
     pub group: usize,
 }
@@ -49,6 +49,10 @@ pub struct SimOptions {
     /// Share simulations between entries that differ only in absorption (default). Off: one
     /// simulation per entry, for measuring what sharing saves.
     pub reuse: bool,
+    /// Wavelengths whose packets are cheap (few scattering events, e.g. strongly absorbed
+    /// blue) get up to this many times `photons`, so that every wavelength of a group costs
+    /// about the same as its most expensive one. 1 turns it off.
+    pub max_boost: u64,
     pub bar: Option<indicatif::ProgressBar>,
 }
 
@@ -159,23 +163,35 @@ pub fn simulate(
             tt: vec![0.0; nl],
             tt_se: vec![0.0; nl],
             rsp: vec![0.0; nl],
-            photons: o.photons,
+            photons: vec![0; nl],
             group: 0,
         })
         .collect();
+    let task = |g: usize, i: usize| {
+        let members = &plan.groups[g];
+        let stack: Stack = transport::stack::from_skin(&entries[members[0]], i);
+        let sets: Vec<Vec<f64>> = members
+            .iter()
+            .map(|&m| entries[m].layers.iter().map(|l| l.mua_per_mm[i]).collect())
+            .collect();
+        (stack, sets)
+    };
+    let photons = photon_counts(entries, lambda_nm, plan, o, &task)?;
+    if let Some(b) = &o.bar {
+        b.set_length(photons.iter().flatten().sum());
+    }
     let total = plan.groups.len() * nl;
     let mut done = 0;
     for (g, members) in plan.groups.iter().enumerate() {
         for i in 0..nl {
             let t0 = Instant::now();
-            let stack: Stack = transport::stack::from_skin(&entries[members[0]], i);
-            let sets: Vec<Vec<f64>> = members
-                .iter()
-                .map(|&m| entries[m].layers.iter().map(|l| l.mua_per_mm[i]).collect())
-                .collect();
-            let mut mo = McOptions::new(o.photons, task_seed(o.seed, plan.digests[g], i));
+            let (stack, sets) = task(g, i);
+            let mut mo = McOptions::new(photons[g][i], task_seed(o.seed, plan.digests[g], i));
             mo.threads = o.threads;
             mo.bar = o.bar.clone();
+            // The profile a renderer applies everywhere: averaged over where the beam meets
+            // the junction's papillae (profile/DECISIONS.md, row 1).
+            mo.random_entry = true;
             let run = run_white_sets(&stack, &sets, bins, &mo).map_err(|err| {
                 anyhow::anyhow!(
                     "entry {} at {} nm: {err}",
@@ -187,6 +203,7 @@ pub fn simulate(
             for (&m, t) in members.iter().zip(&run.sets) {
                 let p = &mut out[m];
                 p.group = g;
+                p.photons[i] = n;
                 p.rsp[i] = run.rsp;
                 p.rd_total[i] = t.rd.mean(n);
                 p.rd_total_se[i] = t.rd.se(n);
@@ -204,3 +221,53 @@ pub fn simulate(
     }
     Ok(out)
 }
+
+/// Photons per group and wavelength: `o.photons`, times an integer boost ⌊e_max/e_λ⌋ capped
+/// at `o.max_boost`, e_λ the scattering events per packet of a short pilot run (deterministic:
+/// seeded like the main runs) and e_max the group's largest. Cheap wavelengths — strongly
+/// absorbed blue light, where dark skin's profiles are noisiest — get more packets for about
+/// the cost of the group's most expensive wavelength.
+fn photon_counts(
+    entries: &[OpticsEntry],
+    lambda_nm: &[f64],
+    plan: &Plan,
+    o: &SimOptions,
+    task: &dyn Fn(usize, usize) -> (Stack, Vec<Vec<f64>>),
+) -> anyhow::Result<Vec<Vec<u64>>> {
+    let nl = lambda_nm.len();
+    if o.max_boost <= 1 {
+        return Ok(vec![vec![o.photons; nl]; plan.groups.len()]);
+    }
+    let pilot = (o.photons / 100).clamp(2_000, 20_000).min(o.photons);
+    let mut out = Vec::new();
+    for g in 0..plan.groups.len() {
+        let mut events = Vec::with_capacity(nl);
+        for i in 0..nl {
+            let (stack, sets) = task(g, i);
+            let mut mo = McOptions::new(pilot, task_seed(o.seed ^ PILOT_TAG, plan.digests[g], i));
+            mo.threads = o.threads;
+            mo.random_entry = true;
+            let run = run_white_sets(&stack, &sets, &RadialBins::uniform(1.0, 1), &mo).map_err(
+                |err| {
+                    anyhow::anyhow!(
+                        "entry {} at {} nm: {err}",
+                        entries[plan.groups[g][0]].name,
+                        lambda_nm[i]
+                    )
+                },
+            )?;
+            events.push((run.scattering_events as f64 / run.photons as f64).max(1.0));
+        }
+        let e_max = events.iter().cloned().fold(1.0, f64::max);
+        out.push(
+            events
+                .iter()
+                .map(|e| o.photons * ((e_max / e).floor() as u64).clamp(1, o.max_boost))
+                .collect(),
+        );
+    }
+    Ok(out)
+}
+
+/// Seeds of the pilot runs differ from those of the main runs.
+const PILOT_TAG: u64 = 0x5049_4c4f_545f_5255; // "PILOT_RU"

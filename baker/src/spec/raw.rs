@@ -32,6 +32,7 @@ pub struct RawProfiles {
     pub photons: Option<Spanned<f64>>,
     pub seed: Option<Spanned<f64>>,
     pub gaussians: Option<Spanned<f64>>,
+    pub max_photon_boost: Option<Spanned<f64>>,
     pub radial: Option<Spanned<RawRadial>>,
 }
 

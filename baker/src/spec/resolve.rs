@@ -36,6 +36,8 @@ pub struct ProfileSettings {
     pub seed: u64,
     /// Gaussians in the sum-of-Gaussians fit (6 for real-time renderers).
     pub gaussians: usize,
+    /// Cheap wavelengths get up to this many times `photons` ([`crate::profile::SimOptions`]).
+    pub max_photon_boost: u64,
     /// Radial grid: bins of `dr_min_mm`, then each `growth` times wider, up to `r_max_mm`.
     pub dr_min_mm: f64,
     pub growth: f64,
@@ -52,6 +54,7 @@ impl Default for ProfileSettings {
             photons: DEFAULT_PROFILE_PHOTONS,
             seed: 1,
             gaussians: 6,
+            max_photon_boost: 1,
             dr_min_mm: 0.01,
             growth: 1.05,
             r_max_mm: 40.0,
@@ -60,7 +63,7 @@ impl Default for ProfileSettings {
 }
 
 /// Default photons per wavelength and shared simulation.
-pub const DEFAULT_PROFILE_PHOTONS: u64 = 2_000_000;
+pub const DEFAULT_PROFILE_PHOTONS: u64 = 4_000_000;
 
 /// One concrete entry (a listed entry, or one point of a sweep).
 #[derive(Debug, Clone)]
@@ -347,6 +350,15 @@ impl Ctx {
         }
         if let Some(n) = count(self, "profiles.gaussians", &p.gaussians, 1.0, 16.0) {
             s.gaussians = n as usize;
+        }
+        if let Some(n) = count(
+            self,
+            "profiles.max_photon_boost",
+            &p.max_photon_boost,
+            1.0,
+            64.0,
+        ) {
+            s.max_photon_boost = n;
         }
         if let Some(r) = &p.radial {
             let r = &r.value;

@@ -34,6 +34,11 @@ pub struct McOptions {
     /// Advance this bar (photons) instead of drawing one per run: a bake shows one bar over
     /// all its simulations.
     pub bar: Option<indicatif::ProgressBar>,
+    /// With a junction: each packet enters at a uniformly random point of the junction's
+    /// period cell, and radii are measured from that point. The result is the profile averaged
+    /// over where the beam meets the papillae, what a renderer applying one profile everywhere
+    /// needs; off, the beam always enters above a node of Eq. 1 (MCML-like, x = y = 0).
+    pub random_entry: bool,
 }
 
 impl McOptions {
@@ -45,6 +50,7 @@ impl McOptions {
             batch_size: 10_000,
             progress: false,
             bar: None,
+            random_entry: false,
         }
     }
 }
@@ -75,6 +81,9 @@ pub(crate) struct Prepared {
     pub dr_mm: f64,
     pub nr: usize,
     pub rsp: f64,
+    /// Period cell (x, y) in which packets enter at a random point (see
+    /// [`McOptions::random_entry`]); `None`: every packet enters at the origin.
+    pub entry_cell_mm: Option<[f64; 2]>,
 }
 
 impl Prepared {
@@ -98,6 +107,7 @@ impl Prepared {
             dr_mm: s.grid.dr_mm,
             nr: s.grid.nr,
             rsp: normal_reflectance(s.n_above, s.layers[0].eta),
+            entry_cell_mm: None,
         };
         p.z[..=nl].copy_from_slice(&zs);
         p.n[0] = s.n_above;
@@ -122,6 +132,23 @@ impl Prepared {
             }
         }
         Ok(p)
+    }
+
+    /// Applies [`McOptions::random_entry`] for stack `s`: the junction's period cell, if any.
+    pub fn set_random_entry(&mut self, s: &Stack, on: bool) {
+        self.entry_cell_mm = match (&s.junction, on) {
+            (Some(j), true) if j.amplitude_mm > 0.0 => {
+                let period = |w: f64| {
+                    if w > 0.0 {
+                        std::f64::consts::TAU / w
+                    } else {
+                        0.0
+                    }
+                };
+                Some([period(j.omega_x_per_mm), period(j.omega_y_per_mm)])
+            }
+            _ => None,
+        };
     }
 
     /// Distance to the boundary the photon would reach first, up to `step`, and which one.
@@ -243,7 +270,12 @@ pub(crate) fn trace<const WHITE: bool, S: Scorer>(
     s: &mut S,
     events: &mut u64,
 ) {
-    let mut pos = [0.0f64; 3];
+    let origin = match p.entry_cell_mm {
+        Some([px, py]) => [uniform(rng.next_u64()) * px, uniform(rng.next_u64()) * py],
+        None => [0.0, 0.0],
+    };
+    let mut pos = [origin[0], origin[1], 0.0];
+    let rel = |pos: &[f64; 3]| [pos[0] - origin[0], pos[1] - origin[1], pos[2]];
     let mut u = [0.0f64, 0.0, 1.0];
     let mut w = 1.0 - p.rsp;
     let mut layer = 0usize;
@@ -305,7 +337,7 @@ pub(crate) fn trace<const WHITE: bool, S: Scorer>(
                     u[2] = if up { -cos_t } else { cos_t };
                     let escaped = if up { layer == 0 } else { layer + 1 == p.nl };
                     if escaped {
-                        s.escape(up, scattered, w, &pos, cos_t, &path[..p.nl]);
+                        s.escape(up, scattered, w, &rel(&pos), cos_t, &path[..p.nl]);
                         s.photon_done();
                         return;
                     }
@@ -353,7 +385,7 @@ pub(crate) fn trace<const WHITE: bool, S: Scorer>(
             } else {
                 let dw = w * p.absorb_frac[layer];
                 w -= dw;
-                s.absorb(layer, dw, &pos);
+                s.absorb(layer, dw, &rel(&pos));
             }
             debug_assert!(w.is_finite());
             spin(&mut u, p.g[layer], rng);
@@ -484,7 +516,8 @@ pub(crate) fn run_batches<T: Send>(
 
 /// Direct simulation of `stack`: every tally with its standard error.
 pub fn run(stack: &Stack, o: &McOptions) -> anyhow::Result<McResult> {
-    let p = Prepared::new(stack)?;
+    let mut p = Prepared::new(stack)?;
+    p.set_random_entry(stack, o.random_entry);
     let nl = p.nl;
     let no_ref = [0.0; MAX_LAYERS];
     let t0 = Instant::now();

@@ -76,7 +76,8 @@ impl Scorer for WhiteScorer {
 /// to the reference have the lowest variance. Choose the smallest μa you will apply, per layer.
 /// A semi-infinite layer needs a reference μa > 0, or packets could wander without end.
 pub fn run_white(stack: &Stack, mua_ref_per_mm: &[f64], o: &McOptions) -> anyhow::Result<WhiteRun> {
-    let p = Prepared::new(stack)?;
+    let mut p = Prepared::new(stack)?;
+    p.set_random_entry(stack, o.random_entry);
     if mua_ref_per_mm.len() != p.nl {
         anyhow::bail!(
             "{} reference absorption coefficients for {} layers",
@@ -271,7 +272,8 @@ pub fn run_white_sets(
     bins: &RadialBins,
     o: &McOptions,
 ) -> anyhow::Result<WhiteSets> {
-    let p = Prepared::new(stack)?;
+    let mut p = Prepared::new(stack)?;
+    p.set_random_entry(stack, o.random_entry);
     if sets.is_empty() {
         anyhow::bail!("no absorption sets to apply");
     }
