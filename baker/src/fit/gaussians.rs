@@ -12,6 +12,9 @@
 //! non-negative least squares); the variances are then optimised on the error itself
 //! (Nelder–Mead on log v, restarted until it stops improving), not just picked from a grid.
 
+// Index loops mirror the formulas (rows, columns, bins); iterator chains would hide them.
+#![allow(clippy::needless_range_loop)]
+
 use super::nnls::nnls_normal;
 
 /// Energy of G(v, ·) in the annulus [a, b] (its integral over the annulus, mm² cancel).
@@ -260,7 +263,7 @@ fn optimise(p: &Problem, x0: &[f64], o: &FitOptions) -> (Vec<f64>, f64) {
     (x, fx)
 }
 
-/// Fits `table` (bin averages per unit area, [nr][3], on annuli `edges_mm`) inside each
+/// Fits `table` (bin averages per unit area, `[nr][3]`, on annuli `edges_mm`) inside each
 /// channel's 99 % radius `r99_mm`, with `o.count` shared variances.
 pub fn fit_sum_of_gaussians(
     edges_mm: &[f64],

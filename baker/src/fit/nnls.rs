@@ -2,6 +2,9 @@
 //! minimise ½·wᵀGw − hᵀw subject to w ≥ 0 (Lawson & Hanson 1974, ch. 23, active-set method),
 //! with G = BᵀDB and h = BᵀDe for a weighted problem ‖D^½(Bw − e)‖².
 
+// Index loops mirror the formulas (rows, columns, bins); iterator chains would hide them.
+#![allow(clippy::needless_range_loop)]
+
 /// Solves `g`·z = `h` on the index set `p` by Gaussian elimination with partial pivoting.
 /// Returns `None` when the reduced system is singular.
 fn solve_on(g: &[Vec<f64>], h: &[f64], p: &[usize]) -> Option<Vec<f64>> {

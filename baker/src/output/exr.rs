@@ -13,7 +13,7 @@ use exr::prelude::*;
 
 use super::atomic;
 
-/// Writes `rows` (one [nr][3] profile per entry, all on the same `r_edges_mm`) to `path`.
+/// Writes `rows` (one `[nr][3]` profile per entry, all on the same `r_edges_mm`) to `path`.
 pub fn write(
     path: &Path,
     names: &[String],
@@ -43,11 +43,13 @@ pub fn write(
         AnyChannel::new("B", FlatSamples::F32(channel(2))),
         AnyChannel::new("r_mm", FlatSamples::F32(r_mm)),
     ]);
-    let mut attrs = LayerAttributes::default();
-    attrs.comments = Some(Text::from(
-        "baker skin diffusion profiles: row = entry (see 'entries'), column = radial bin \
-         (see 'r_mm'); R,G,B = linear sRGB Rd(r) in mm^-2",
-    ));
+    let attrs = LayerAttributes {
+        comments: Some(Text::from(
+            "baker skin diffusion profiles: row = entry (see 'entries'), column = radial bin \
+             (see 'r_mm'); R,G,B = linear sRGB Rd(r) in mm^-2",
+        )),
+        ..LayerAttributes::default()
+    };
     let layer = Layer::new(
         (w, h),
         attrs,

@@ -12,7 +12,7 @@ pub struct RgbProfile {
     /// Linear sRGB total diffuse reflectance (white diffuser = 1).
     pub albedo_rgb: [f64; 3],
     pub albedo_rgb_se: [f64; 3],
-    /// [nr] linear sRGB Rd(r), mm⁻², bin averages.
+    /// `[nr]` linear sRGB Rd(r), mm⁻², bin averages.
     pub rd_rgb_per_mm2: Vec<[f64; 3]>,
     pub rd_rgb_per_mm2_se: Vec<[f64; 3]>,
     /// Radius holding 99 % of each channel's diffuse energy, mm; NaN when the grid ends first.

@@ -1,6 +1,9 @@
 //! Grouping entries by shared scattering, and running one white simulation per group and
 //! wavelength.
 
+// Index loops mirror the formulas (rows, columns, bins); iterator chains would hide them.
+#![allow(clippy::needless_range_loop)]
+
 use std::collections::HashMap;
 use std::time::Instant;
 
@@ -14,17 +17,17 @@ use crate::transport::{self, run_white_sets, McOptions, RadialBins, Stack};
 pub struct SpectralProfile {
     pub lambda_nm: Vec<f64>,
     pub r_edges_mm: Vec<f64>,
-    /// [nλ][nr], mm⁻².
+    /// `[nλ][nr]`, mm⁻².
     pub rd_per_mm2: Vec<Vec<f64>>,
     pub rd_per_mm2_se: Vec<Vec<f64>>,
-    /// Diffuse reflectance of scattered light over the whole plane, [nλ].
+    /// Diffuse reflectance of scattered light over the whole plane, `[nλ]`.
     pub rd_total: Vec<f64>,
     pub rd_total_se: Vec<f64>,
-    /// Light sent back by inner interfaces without scattering (a delta at r ≈ 0), [nλ].
+    /// Light sent back by inner interfaces without scattering (a delta at r ≈ 0), `[nλ]`.
     pub rd_unscattered: Vec<f64>,
     pub tt: Vec<f64>,
     pub tt_se: Vec<f64>,
-    /// Specular reflectance of the air–stratum corneum interface, [nλ].
+    /// Specular reflectance of the air–stratum corneum interface, `[nλ]`.
     pub rsp: Vec<f64>,
     /// Photons traced per wavelength.
     pub photons: Vec<u64>,
