@@ -222,22 +222,24 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         tables::Tables {
             attrs: vec![
             ("format".into(), tables::FORMAT.into()),
-            ("format_version".into(), tables::FORMAT_VERSION.to_string()),
-            ("spec_file".into(), spec.file.clone()),
+            ("format_version".into(), u64::from(tables::FORMAT_VERSION).into()),
+            ("spec_file".into(), spec.file.clone().into()),
             ("baker_version".into(), env!("CARGO_PKG_VERSION").into()),
-            ("photons".into(), photons.to_string()),
-            ("seed".into(), settings.seed.to_string()),
-            ("gaussians".into(), settings.gaussians.to_string()),
-            ("max_photon_boost".into(), settings.max_photon_boost.to_string()),
-            ("absorption_reuse".into(), (!a.no_reuse).to_string()),
+            ("photons".into(), photons.into()),
+            ("seed".into(), settings.seed.into()),
+            ("gaussians".into(), (settings.gaussians as u64).into()),
+            ("max_photon_boost".into(), settings.max_photon_boost.into()),
+            ("absorption_reuse".into(), (!a.no_reuse).to_string().into()),
             (
                 "entries".into(),
-                serde_json::to_string(&entries.iter().map(|e| &e.name).collect::<Vec<_>>())?,
+                serde_json::to_string(&entries.iter().map(|e| &e.name).collect::<Vec<_>>())?
+                    .into(),
             ),
             (
                 "source".into(),
                 "Rd(r, lambda): white Monte Carlo with absorption reuse, pencil beam at normal \
-                 incidence, MCML-class multi-layer transport with the Eq. 1 junction (thesis 3.5)"
+                 incidence entering at a random point of the junction's period, MCML-class \
+                 multi-layer transport with the Eq. 1 junction (thesis 3.5)"
                     .into(),
             ),
         ],
@@ -362,17 +364,18 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn entry_attrs(e: &formats::OpticsEntry, p: &SpectralProfile) -> Vec<(String, String)> {
+fn entry_attrs(e: &formats::OpticsEntry, p: &SpectralProfile) -> Vec<(String, tables::Attr)> {
     let v = &e.inputs;
-    let mut attrs = vec![("params_json".to_string(), v.to_string())];
+    let mut attrs: Vec<(String, tables::Attr)> = vec![("params_json".into(), v.to_string().into())];
     for key in ["age_years", "gender", "location", "xi", "model"] {
-        if let Some(x) = v.get(key) {
-            attrs.push((
-                key.into(),
-                x.as_str()
-                    .map(str::to_string)
-                    .unwrap_or_else(|| x.to_string()),
-            ));
+        match v.get(key) {
+            Some(serde_json::Value::String(s)) => attrs.push((key.into(), s.clone().into())),
+            Some(x) => {
+                if let Some(f) = x.as_f64() {
+                    attrs.push((key.into(), f.into()));
+                }
+            }
+            None => {}
         }
     }
     if let Some(t) = v
@@ -382,10 +385,14 @@ fn entry_attrs(e: &formats::OpticsEntry, p: &SpectralProfile) -> Vec<(String, St
     {
         attrs.push(("skin_type".into(), t.into()));
     }
-    if let Some(f) = e.intermediate.get("melanosome_fraction") {
-        attrs.push(("melanosome_fraction".into(), f.to_string()));
+    if let Some(f) = e
+        .intermediate
+        .get("melanosome_fraction")
+        .and_then(|f| f.as_f64())
+    {
+        attrs.push(("melanosome_fraction".into(), f.into()));
     }
-    attrs.push(("simulation_group".into(), p.group.to_string()));
+    attrs.push(("simulation_group".into(), (p.group as u64).into()));
     attrs
 }
 

@@ -16,14 +16,14 @@ pub const KIND: &str = "skin_profiles";
 pub fn to_table_file(t: &Tables) -> anyhow::Result<TableFile> {
     let mut meta = serde_json::Map::new();
     for (k, v) in &t.attrs {
-        meta.insert(k.clone(), serde_json::Value::String(v.clone()));
+        meta.insert(k.clone(), v.to_json());
     }
     let mut groups = serde_json::Map::new();
     for g in &t.groups {
         let attrs: serde_json::Map<String, serde_json::Value> = g
             .attrs
             .iter()
-            .map(|(k, v)| (k.clone(), serde_json::Value::String(v.clone())))
+            .map(|(k, v)| (k.clone(), v.to_json()))
             .collect();
         groups.insert(g.name.clone(), serde_json::Value::Object(attrs));
     }

@@ -12,7 +12,7 @@ use hdf5_metno as h5;
 use hdf5_metno::types::VarLenUnicode;
 use hdf5_metno_sys::h5i::hid_t;
 
-use super::tables::{Dataset, Tables};
+use super::tables::{Attr, Dataset, Tables};
 
 // The HDF5 high-level dimension-scale API (libhdf5_hl); hdf5-metno does not wrap it.
 extern "C" {
@@ -26,6 +26,14 @@ fn text_attr(loc: &h5::Location, name: &str, value: &str) -> anyhow::Result<()> 
         .create(name)?
         .write_scalar(&v)?;
     Ok(())
+}
+
+fn attr(loc: &h5::Location, name: &str, value: &Attr) -> anyhow::Result<()> {
+    match value {
+        Attr::Text(s) => text_attr(loc, name, s),
+        Attr::Float(x) => Ok(loc.new_attr::<f64>().create(name)?.write_scalar(x)?),
+        Attr::Count(n) => Ok(loc.new_attr::<u64>().create(name)?.write_scalar(n)?),
+    }
 }
 
 fn write_dataset(g: &h5::Group, d: &Dataset) -> anyhow::Result<h5::Dataset> {
@@ -95,7 +103,7 @@ fn write_to(path: &Path, t: &Tables) -> anyhow::Result<()> {
         .with_fcpl(|p| p.obj_track_times(false))
         .create(path)?;
     for (k, v) in &t.attrs {
-        text_attr(&f, k, v)?;
+        attr(&f, k, v)?;
     }
     for grp in &t.groups {
         let g = f
@@ -103,7 +111,7 @@ fn write_to(path: &Path, t: &Tables) -> anyhow::Result<()> {
             .obj_track_times(false)
             .create(grp.name.as_str())?;
         for (k, v) in &grp.attrs {
-            text_attr(&g, k, v)?;
+            attr(&g, k, v)?;
         }
         let mut written = Vec::new();
         for d in &grp.datasets {

@@ -23,18 +23,60 @@ pub struct Dataset {
     pub dims: Vec<Option<&'static str>>,
 }
 
+/// An attribute value: HDF5 writes a scalar string, f64 or u64 attribute; `.bkt` a JSON
+/// string or number.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Attr {
+    Text(String),
+    Float(f64),
+    Count(u64),
+}
+
+impl From<&str> for Attr {
+    fn from(s: &str) -> Self {
+        Attr::Text(s.to_string())
+    }
+}
+
+impl From<String> for Attr {
+    fn from(s: String) -> Self {
+        Attr::Text(s)
+    }
+}
+
+impl From<f64> for Attr {
+    fn from(x: f64) -> Self {
+        Attr::Float(x)
+    }
+}
+
+impl From<u64> for Attr {
+    fn from(n: u64) -> Self {
+        Attr::Count(n)
+    }
+}
+
+impl Attr {
+    pub fn to_json(&self) -> serde_json::Value {
+        match self {
+            Attr::Text(s) => serde_json::Value::String(s.clone()),
+            Attr::Float(x) => serde_json::json!(x),
+            Attr::Count(n) => serde_json::json!(n),
+        }
+    }
+}
+
 /// A group: an entry, or `colour`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Group {
     pub name: String,
-    /// String attributes (numbers are written as text too: one attribute type for every tool).
-    pub attrs: Vec<(String, String)>,
+    pub attrs: Vec<(String, Attr)>,
     pub datasets: Vec<Dataset>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tables {
-    pub attrs: Vec<(String, String)>,
+    pub attrs: Vec<(String, Attr)>,
     pub groups: Vec<Group>,
 }
 
@@ -117,7 +159,7 @@ pub fn colour_group(c: &ColourMap) -> Group {
 /// The group of one entry.
 pub fn entry_group(
     e: &OpticsEntry,
-    attrs: Vec<(String, String)>,
+    attrs: Vec<(String, Attr)>,
     p: &SpectralProfile,
     rgb: &RgbProfile,
 ) -> Group {
