@@ -35,7 +35,6 @@ fn bake(yaml: &str, photons: u64, reuse: bool, max_boost: u64) -> Baked {
         photons,
         seed: 11,
         threads: None,
-        reuse,
         max_boost,
         bar: None,
     };

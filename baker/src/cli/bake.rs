@@ -169,7 +169,6 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         photons,
         seed: settings.seed,
         threads: a.threads,
-        reuse: !a.no_reuse,
         max_boost: settings.max_photon_boost,
         bar: bar.clone(),
     };

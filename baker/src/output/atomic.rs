@@ -6,6 +6,19 @@ use std::path::Path;
 
 /// Writes `bytes` to `path` atomically: readers see the old file or the whole new one.
 pub fn write(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    write_with(path, |tmp| {
+        let mut f = File::create(tmp)?;
+        f.write_all(bytes)
+    })
+}
+
+/// Lets `fill` create and write a temporary file next to `path` (for writers that open files
+/// themselves, such as HDF5), syncs it and renames it to `path`; the temporary file is removed
+/// if anything fails.
+pub fn write_with<E: From<io::Error>>(
+    path: &Path,
+    fill: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), E> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -19,12 +32,11 @@ pub fn write(path: &Path, bytes: &[u8]) -> io::Result<()> {
         name.to_string_lossy(),
         std::process::id()
     ));
-    let result = (|| {
-        let mut f = File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        fs::rename(&tmp, path)
-    })();
+    let result = fill(&tmp).and_then(|()| {
+        File::open(&tmp)?.sync_all()?;
+        fs::rename(&tmp, path)?;
+        Ok(())
+    });
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }

@@ -76,26 +76,8 @@ fn write_dataset(g: &h5::Group, d: &Dataset) -> anyhow::Result<h5::Dataset> {
 
 /// Writes `t` to `path` atomically.
 pub fn write(path: &Path, t: &Tables) -> anyhow::Result<()> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir)?;
-    let name = path.file_name().context("HDF5 path has no file name")?;
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = write_to(&tmp, t).and_then(|()| {
-        std::fs::File::open(&tmp)?.sync_all()?;
-        std::fs::rename(&tmp, path)?;
-        Ok(())
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.with_context(|| format!("writing {}", path.display()))
+    super::atomic::write_with(path, |tmp| write_to(tmp, t))
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 fn write_to(path: &Path, t: &Tables) -> anyhow::Result<()> {

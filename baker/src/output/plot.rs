@@ -106,6 +106,11 @@ pub fn plot(path: &Path, lambda_nm: &[f64], e: &OpticsEntry, q: Quantity) -> any
             .draw()?;
         root.present()?;
     }
+    write_png(path, w, h, buf)
+}
+
+/// Encodes an RGB8 buffer of `w`×`h` pixels as PNG and writes it atomically.
+pub(crate) fn write_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> anyhow::Result<()> {
     let mut png = Vec::new();
     let img = image::RgbImage::from_raw(w, h, buf).expect("buffer size matches");
     img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)?;

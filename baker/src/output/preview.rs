@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use super::plot::ensure_font;
+use super::plot::{ensure_font, write_png as png};
 use crate::fit::gaussian_energy;
 use crate::profile::RgbProfile;
 use crate::spectral::colour::srgb_encode;
@@ -21,17 +21,6 @@ pub struct SheetEntry<'a> {
     pub column: (f64, String),
     pub albedo_rgb: [f64; 3],
     pub name: &'a str,
-}
-
-fn png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> anyhow::Result<()> {
-    let mut bytes = Vec::new();
-    let img = image::RgbImage::from_raw(w, h, buf).expect("buffer size matches");
-    img.write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )?;
-    super::atomic::write(path, &bytes)?;
-    Ok(())
 }
 
 fn file_safe(s: &str) -> String {

@@ -49,9 +49,6 @@ pub struct SimOptions {
     pub photons: u64,
     pub seed: u64,
     pub threads: Option<usize>,
-    /// Share simulations between entries that differ only in absorption (default). Off: one
-    /// simulation per entry, for measuring what sharing saves.
-    pub reuse: bool,
     /// Wavelengths whose packets are cheap (few scattering events, e.g. strongly absorbed
     /// blue) get up to this many times `photons`, so that every wavelength of a group costs
     /// about the same as its most expensive one. 1 turns it off.
