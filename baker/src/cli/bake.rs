@@ -154,17 +154,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         ),
     );
     let terminal = std::io::stderr().is_terminal();
-    let bar = (!a.quiet && terminal).then(|| {
-        let b = indicatif::ProgressBar::new(n_sims as u64 * photons);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{elapsed_precise} [{bar:40}] {percent:>3}% {msg} eta {eta}",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        );
-        b
-    });
+    let bar = (!a.quiet && terminal).then(|| super::progress::bar(n_sims as u64 * photons, ""));
     let sim = SimOptions {
         photons,
         seed: settings.seed,

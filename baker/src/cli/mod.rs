@@ -18,8 +18,10 @@ macro_rules! out {
 
 mod bake;
 mod bench;
+mod fiber;
 mod mc;
 mod optics;
+mod progress;
 
 use std::path::PathBuf;
 
@@ -57,6 +59,9 @@ pub enum Command {
     /// Transport throughput (photons/s, scattering events/s) on the thesis's reference skin
     /// stack, for each thread count.
     Bench(bench::BenchArgs),
+    /// Single-fiber light transport (thesis ch. 5): trace a beam through one fiber.
+    #[command(subcommand)]
+    Fiber(fiber::FiberCommand),
     /// Bake whole specs into `--out` (default `out/`): every product of every entry.
     Bake(bake::BakeArgs),
 }
@@ -82,6 +87,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bake(a) => bake::run(a),
         Command::Mc(a) => mc::run(a),
         Command::Bench(a) => bench::run(a),
+        Command::Fiber(c) => fiber::run(c),
     }
 }
 

@@ -11,4 +11,5 @@ pub mod manifest;
 pub mod mci;
 pub mod plot;
 pub mod preview;
+pub mod slice;
 pub mod tables;

@@ -3,6 +3,7 @@
 //! and produces model inputs. Nothing downstream sees raw YAML.
 
 pub mod error;
+pub mod fiber;
 pub mod raw;
 pub mod resolve;
 

@@ -114,7 +114,7 @@ pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
 
 /// serde-saphyr's message without its own "error: line L column C:" prefix and source snippet
 /// (we print file:line:column), prefixed with the field when the message lacks it.
-fn describe_syntax_error(text: &str, line: u64, message: &str) -> String {
+pub(super) fn describe_syntax_error(text: &str, line: u64, message: &str) -> String {
     let mut m = message.lines().next().unwrap_or(message).trim();
     m = m.strip_prefix("error:").unwrap_or(m).trim();
     if let Some(rest) = m.strip_prefix("line ") {
@@ -138,12 +138,12 @@ fn describe_syntax_error(text: &str, line: u64, message: &str) -> String {
     }
 }
 
-struct Ctx {
-    file: String,
-    errors: Vec<SpecError>,
+pub(super) struct Ctx {
+    pub(super) file: String,
+    pub(super) errors: Vec<SpecError>,
 }
 
-fn loc<T>(s: &Spanned<T>) -> (u64, u64) {
+pub(super) fn loc<T>(s: &Spanned<T>) -> (u64, u64) {
     (s.referenced.line(), s.referenced.column())
 }
 
@@ -160,7 +160,7 @@ struct Point {
 }
 
 impl Ctx {
-    fn invalid(&mut self, at: (u64, u64), field: &str, message: impl Into<String>) {
+    pub(super) fn invalid(&mut self, at: (u64, u64), field: &str, message: impl Into<String>) {
         self.errors.push(SpecError::Invalid {
             file: self.file.clone(),
             line: at.0,
@@ -170,7 +170,13 @@ impl Ctx {
         });
     }
 
-    fn out_of_range(&mut self, at: (u64, u64), field: &str, value: String, allowed: String) {
+    pub(super) fn out_of_range(
+        &mut self,
+        at: (u64, u64),
+        field: &str,
+        value: String,
+        allowed: String,
+    ) {
         self.errors.push(SpecError::OutOfRange {
             file: self.file.clone(),
             line: at.0,
@@ -182,7 +188,7 @@ impl Ctx {
     }
 
     /// `v` within [lo, hi] (`open_lo`: lo excluded); records an error otherwise.
-    fn in_range(
+    pub(super) fn in_range(
         &mut self,
         field: &str,
         v: &Spanned<f64>,
@@ -201,7 +207,7 @@ impl Ctx {
         }
     }
 
-    fn opt_range(
+    pub(super) fn opt_range(
         &mut self,
         field: &str,
         v: &Option<Spanned<f64>>,
@@ -216,7 +222,7 @@ impl Ctx {
         }
     }
 
-    fn choice<T: Copy>(
+    pub(super) fn choice<T: Copy>(
         &mut self,
         field: &str,
         v: &Spanned<String>,

@@ -1,0 +1,325 @@
+//! `baker fiber trace`: one incoming direction through one fiber (§5.3.2), from a spec entry or
+//! from a fiber described on the command line.
+
+use std::path::PathBuf;
+
+use clap::{Args, Subcommand};
+use serde_json::json;
+
+use super::UsageError;
+use crate::fiber::section::generate::{generate, Shape};
+use crate::fiber::section::mask::{from_mask, MaskOptions};
+use crate::fiber::{trace, AngularGrid, Cuticle, Fiber, Incident, Section, Surface, TraceOptions};
+use crate::spec::fiber as fspec;
+
+#[derive(Debug, Subcommand)]
+pub enum FiberCommand {
+    /// Trace a beam from one direction ωi through one fiber: albedo, projected area,
+    /// photons/s, and the outgoing distribution over (θo, Δφ).
+    Trace(TraceArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct TraceArgs {
+    /// Fiber spec (YAML with `fibers:`); use with --entry. Omit to describe the fiber with
+    /// --section and the flags below.
+    pub spec: Option<PathBuf>,
+    /// Fiber entry of the spec.
+    #[arg(long, requires = "spec")]
+    pub entry: Option<String>,
+    /// θi, degrees in [−90, 90]: ωi (towards the light) makes this angle with the plane
+    /// normal to the fiber axis (+z).
+    #[arg(long, allow_hyphen_values = true)]
+    pub theta_i: f64,
+    /// φi, degrees: azimuth of ωi about the fiber axis, from +x towards +y.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
+    pub phi_i: f64,
+    /// Photons launched across the beam.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub photons: u64,
+    /// Seed: the same inputs and seed give bit-identical output for any thread count.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Bin size of θo and Δφ, degrees (must divide 180).
+    #[arg(long, default_value_t = 2.0)]
+    pub resolution_deg: f64,
+    /// Write the outgoing slice as a false-colour log PNG (like Table 8).
+    #[arg(long, value_name = "FILE")]
+    pub png: Option<PathBuf>,
+    /// Print one JSON object instead of a summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Wavelength at which a spec entry's dye gives μa, nm.
+    #[arg(long, default_value_t = 550.0, requires = "spec")]
+    pub lambda_nm: f64,
+    /// Cross-section: circle | ellipse:RATIO | polygon:FILE.csv | mask:FILE.png:UM_PER_PX |
+    /// a generator (trilobal, silk, cotton_raw, cotton_mercerised, wool).
+    #[arg(long, conflicts_with = "spec")]
+    pub section: Option<String>,
+    /// Variant of a generated section (seeded variability).
+    #[arg(long, default_value_t = 0)]
+    pub variant: u64,
+    /// Diameter (mean projected width), µm. Mask and polygon sections keep their own size
+    /// unless given.
+    #[arg(long)]
+    pub diameter_um: Option<f64>,
+    /// Refractive index of the fiber.
+    #[arg(long, default_value_t = 1.55)]
+    pub eta: f64,
+    /// Beckmann roughness β = arctan(Ra/l), degrees (0: smooth).
+    #[arg(long, default_value_t = 0.0)]
+    pub beta_deg: f64,
+    /// Absorption coefficient inside the fiber, per µm (overrides a spec entry's dye).
+    #[arg(long)]
+    pub mua_per_um: Option<f64>,
+    /// Cuticle scale interval along the axis, µm (adds wool-like scales).
+    #[arg(long, conflicts_with = "spec")]
+    pub cuticle_length_um: Option<f64>,
+    /// Cuticle tilt, degrees (with --cuticle-length-um).
+    #[arg(long, default_value_t = 3.0, requires = "cuticle_length_um")]
+    pub cuticle_tilt_deg: f64,
+}
+
+pub fn run(c: FiberCommand) -> anyhow::Result<()> {
+    match c {
+        FiberCommand::Trace(a) => run_trace(a),
+    }
+}
+
+fn usage(m: impl Into<String>) -> anyhow::Error {
+    UsageError(m.into()).into()
+}
+
+/// The fiber and its μa from the command line.
+fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
+    let s = a
+        .section
+        .as_deref()
+        .ok_or_else(|| usage("give a SPEC with --entry, or describe the fiber with --section"))?;
+    let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
+    let diameter = a.diameter_um;
+    let section = match kind {
+        "circle" => Section::circle(diameter.unwrap_or(10.0)),
+        "ellipse" => {
+            let ratio: f64 = rest
+                .parse()
+                .ok()
+                .filter(|r: &f64| *r > 0.0 && *r <= 1.0)
+                .ok_or_else(|| {
+                    usage(format!(
+                        "--section ellipse:RATIO needs a ratio in (0, 1], got {rest:?}"
+                    ))
+                })?;
+            Section::Conic {
+                rx_um: 1.0,
+                ry_um: ratio,
+            }
+            .scaled_to_diameter(diameter.unwrap_or(10.0))?
+        }
+        "polygon" => {
+            let sec =
+                Section::from_csv(std::path::Path::new(rest)).map_err(|e| usage(e.to_string()))?;
+            match diameter {
+                Some(d) => sec.scaled_to_diameter(d)?,
+                None => sec,
+            }
+        }
+        "mask" => {
+            let (file, um) = rest
+                .rsplit_once(':')
+                .ok_or_else(|| usage("--section mask:FILE.png:UM_PER_PX"))?;
+            let um: f64 = um.parse().map_err(|_| {
+                usage(format!(
+                    "--section mask: µm per pixel must be a number, got {um:?}"
+                ))
+            })?;
+            let (sec, rep) = from_mask(std::path::Path::new(file), &MaskOptions::new(um))
+                .map_err(|e| usage(e.to_string()))?;
+            if rep.ignored_components > 0 && !a.json {
+                eprintln!(
+                    "note: {} smaller foreground region(s) ignored",
+                    rep.ignored_components
+                );
+            }
+            match diameter {
+                Some(d) => sec.scaled_to_diameter(d)?,
+                None => sec,
+            }
+        }
+        other => {
+            let shape = Shape::ALL
+                .iter()
+                .find(|s| s.0 == other)
+                .map(|s| s.1)
+                .ok_or_else(|| {
+                    usage(format!(
+                        "--section {other:?}: expected circle, ellipse:RATIO, polygon:FILE.csv, mask:FILE.png:UM_PER_PX or one of {}",
+                        Shape::ALL.iter().map(|s| s.0).collect::<Vec<_>>().join(", ")
+                    ))
+                })?;
+            generate(shape, diameter.unwrap_or(10.0), a.seed, a.variant)?
+        }
+    };
+    if !(a.eta >= 1.0 && a.eta <= 3.0) {
+        return Err(usage(format!("--eta {} out of range [1, 3]", a.eta)));
+    }
+    if !(0.0..=45.0).contains(&a.beta_deg) {
+        return Err(usage(format!(
+            "--beta-deg {} out of range [0, 45]",
+            a.beta_deg
+        )));
+    }
+    let cuticle = match a.cuticle_length_um {
+        Some(l) if l > 0.0 && (0.0..=20.0).contains(&a.cuticle_tilt_deg) => Some(Cuticle {
+            length_um: l,
+            tilt_deg: a.cuticle_tilt_deg,
+        }),
+        Some(_) => {
+            return Err(usage(
+                "--cuticle-length-um must be > 0 and --cuticle-tilt-deg in [0, 20]",
+            ))
+        }
+        None => None,
+    };
+    let fiber = Fiber {
+        section,
+        surface: Surface {
+            eta: a.eta,
+            alpha: a.beta_deg.to_radians().tan(),
+        },
+        cuticle,
+    };
+    Ok((fiber, a.mua_per_um.unwrap_or(0.0), s.to_string()))
+}
+
+fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
+    let (fiber, mua, label) = match &a.spec {
+        Some(spec) => {
+            let s = fspec::load(spec).map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+            let name = a
+                .entry
+                .as_deref()
+                .ok_or_else(|| usage("--entry NAME is required with a spec"))?;
+            let e = s.fibers.iter().find(|f| f.name == name).ok_or_else(|| {
+                usage(format!(
+                    "{}: no fiber entry {name:?}; entries: {}",
+                    spec.display(),
+                    s.fibers
+                        .iter()
+                        .map(|f| f.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?;
+            let mua = a.mua_per_um.unwrap_or_else(|| e.mua_per_um(a.lambda_nm));
+            (e.fiber(), mua, e.name.clone())
+        }
+        None => fiber_from_flags(&a)?,
+    };
+    if !(-90.0..=90.0).contains(&a.theta_i) {
+        return Err(usage(format!(
+            "--theta-i {} out of range [-90, 90]",
+            a.theta_i
+        )));
+    }
+    if a.photons == 0 {
+        return Err(usage("--photons must be at least 1"));
+    }
+    if !(mua >= 0.0 && mua.is_finite()) {
+        return Err(usage(format!("--mua-per-um {mua} must be ≥ 0")));
+    }
+    let grid = AngularGrid::new(a.resolution_deg).map_err(usage)?;
+    let inc = Incident::from_deg(a.theta_i, a.phi_i);
+    let bar = (!a.json).then(|| crate::cli::progress::bar(a.photons, "photons"));
+    let o = TraceOptions {
+        photons: a.photons,
+        seed: a.seed,
+        grid,
+        mua_per_um: vec![mua],
+        bar: bar.clone(),
+    };
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = a.threads {
+        builder = builder.num_threads(t);
+    }
+    let pool = builder.build()?;
+    let r = pool.install(|| trace(&fiber, inc, &o));
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let t = &r.tally;
+    let (albedo, albedo_se) = t.albedo(0);
+    let (h2, h2_se) = t.hist2d(0);
+    let (dh, dh_se) = t.dphi_hist(0);
+    if let Some(png) = &a.png {
+        crate::output::slice::write_slice_png(png, &grid, &h2, 4)?;
+    }
+    let (iw, iw_se) = r.intercepted_width_um();
+    if a.json {
+        let rows: Vec<&[f64]> = h2.chunks(grid.n_phi).collect();
+        let rows_se: Vec<&[f64]> = h2_se.chunks(grid.n_phi).collect();
+        let v = json!({
+            "fiber": label,
+            "theta_i_deg": a.theta_i,
+            "phi_i_deg": a.phi_i,
+            "mua_per_um": mua,
+            "albedo": albedo,
+            "albedo_se": albedo_se,
+            "projected_width_um": r.projected_width_um,
+            "intercepted_width_um": iw,
+            "intercepted_width_se_um": iw_se,
+            "photons": t.intercepted,
+            "photons_launched": t.launched,
+            "photons_lost": t.lost,
+            "surface_fallbacks": t.fallbacks,
+            "mean_path_um": t.mean_path_um(),
+            "seconds": r.seconds,
+            "photons_per_s": r.photons_per_s(),
+            "section": {
+                "area_um2": fiber.section.area_um2(),
+                "mean_width_um": fiber.section.mean_width_um(),
+                "holes": fiber.section.hole_count(),
+                "eta": fiber.surface.eta,
+                "beta_deg": fiber.surface.alpha.atan().to_degrees(),
+                "cuticle": fiber.cuticle,
+            },
+            "theta_o_edges_deg": grid.theta_edges_deg(),
+            "dphi_edges_deg": grid.dphi_edges_deg(),
+            "dphi_hist": dh,
+            "dphi_hist_se": dh_se,
+            "hist2d": rows,
+            "hist2d_se": rows_se,
+        });
+        outln!("{v}")?;
+    } else {
+        outln!(
+            "fiber {label}: θi = {}°, φi = {}°, μa = {mua} /µm",
+            a.theta_i,
+            a.phi_i
+        )?;
+        outln!("  albedo            {albedo:.6} ± {albedo_se:.6}")?;
+        outln!(
+            "  projected width   {:.4} µm (exact); intercepted {iw:.4} ± {iw_se:.4} µm",
+            r.projected_width_um
+        )?;
+        outln!(
+            "  photons           {} launched, {} intercepted, {} lost",
+            t.launched,
+            t.intercepted,
+            t.lost
+        )?;
+        outln!("  mean path inside  {:.3} µm", t.mean_path_um())?;
+        outln!(
+            "  throughput        {:.3} M photons/s ({:.2} s)",
+            r.photons_per_s() / 1e6,
+            r.seconds
+        )?;
+        if let Some(png) = &a.png {
+            outln!("  wrote {}", png.display())?;
+        }
+    }
+    Ok(())
+}

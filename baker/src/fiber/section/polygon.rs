@@ -1,0 +1,454 @@
+//! Polygonal cross-sections with holes, and the uniform-grid acceleration structure that makes
+//! ray queries against many-edged outlines cheap (§5.3: sections modelled from SEM images).
+
+use super::SectionError;
+
+/// One edge of a loop: from `a` to `b`, with the unit normal `n` pointing out of the material
+/// and the line offset `c = n·a`.
+#[derive(Debug, Clone, Copy)]
+struct Edge {
+    a: [f64; 2],
+    ab: [f64; 2],
+    inv_len2: f64,
+    n: [f64; 2],
+    c: f64,
+}
+
+/// A ray hit on a polygon edge: ray parameter, edge index, outward unit normal, `n·q`.
+#[derive(Debug, Clone, Copy)]
+pub struct EdgeHit {
+    pub t: f64,
+    pub id: u32,
+    pub n: [f64; 2],
+    pub c: f64,
+}
+
+/// A closed outline (counter-clockwise) with holes (clockwise), in micrometres.
+#[derive(Debug, Clone)]
+pub struct Polygon {
+    outer: Vec<[f64; 2]>,
+    holes: Vec<Vec<[f64; 2]>>,
+    edges: Vec<Edge>,
+    grid: Grid,
+}
+
+/// Uniform grid over the bounding box; each cell lists the edges whose bounding box touches it.
+#[derive(Debug, Clone)]
+struct Grid {
+    min: [f64; 2],
+    max: [f64; 2],
+    cell: [f64; 2],
+    n: [usize; 2],
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+/// Signed area (positive for counter-clockwise loops), shoelace formula.
+pub fn signed_area(p: &[[f64; 2]]) -> f64 {
+    let mut s = 0.0;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        s += a[0] * b[1] - b[0] * a[1];
+    }
+    0.5 * s
+}
+
+/// Even–odd point-in-loop test.
+fn in_loop(p: &[[f64; 2]], q: [f64; 2]) -> bool {
+    let mut inside = false;
+    let mut j = p.len() - 1;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[j]);
+        if (a[1] > q[1]) != (b[1] > q[1]) {
+            let x = a[0] + (q[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+            if q[0] < x {
+                inside = !inside;
+            }
+        }
+        j = i;
+    }
+    inside
+}
+
+/// Proper intersection of segments p1p2 and p3p4 (shared endpoints do not count).
+fn segments_cross(p1: [f64; 2], p2: [f64; 2], p3: [f64; 2], p4: [f64; 2]) -> bool {
+    let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    let d1 = orient(p3, p4, p1);
+    let d2 = orient(p3, p4, p2);
+    let d3 = orient(p1, p2, p3);
+    let d4 = orient(p1, p2, p4);
+    d1 * d2 < 0.0 && d3 * d4 < 0.0
+}
+
+impl Polygon {
+    /// Builds a section from an outer loop and holes (any orientation; fixed here). Rejects
+    /// loops with fewer than 3 vertices, zero area, self-intersections, holes outside the outer
+    /// loop and overlapping holes.
+    pub fn new(outer: Vec<[f64; 2]>, holes: Vec<Vec<[f64; 2]>>) -> Result<Self, SectionError> {
+        let mut outer = clean(outer);
+        let mut holes: Vec<Vec<[f64; 2]>> = holes.into_iter().map(clean).collect();
+        if outer.len() < 3 || signed_area(&outer).abs() < 1e-12 {
+            return Err(SectionError::Degenerate(
+                "outer loop needs 3+ vertices and an area".into(),
+            ));
+        }
+        if signed_area(&outer) < 0.0 {
+            outer.reverse();
+        }
+        for (k, h) in holes.iter_mut().enumerate() {
+            if h.len() < 3 || signed_area(h).abs() < 1e-12 {
+                return Err(SectionError::Degenerate(format!(
+                    "hole {k} needs 3+ vertices"
+                )));
+            }
+            if signed_area(h) > 0.0 {
+                h.reverse();
+            }
+            if !h.iter().all(|&v| in_loop(&outer, v)) {
+                return Err(SectionError::Degenerate(format!(
+                    "hole {k} is not inside the outer loop"
+                )));
+            }
+        }
+        let loops: Vec<&Vec<[f64; 2]>> = std::iter::once(&outer).chain(holes.iter()).collect();
+        let mut segs = Vec::new();
+        for l in &loops {
+            for i in 0..l.len() {
+                segs.push((l[i], l[(i + 1) % l.len()]));
+            }
+        }
+        if segs.len() <= 20_000 {
+            for i in 0..segs.len() {
+                for j in i + 1..segs.len() {
+                    if segments_cross(segs[i].0, segs[i].1, segs[j].0, segs[j].1) {
+                        return Err(SectionError::Degenerate(format!(
+                            "outline crosses itself near ({:.3}, {:.3}) µm",
+                            segs[i].0[0], segs[i].0[1]
+                        )));
+                    }
+                }
+            }
+        }
+        let edges: Vec<Edge> = segs
+            .iter()
+            .map(|&(a, b)| {
+                let ab = [b[0] - a[0], b[1] - a[1]];
+                let len2 = ab[0] * ab[0] + ab[1] * ab[1];
+                let len = len2.sqrt();
+                // Counter-clockwise outer loop, clockwise holes: the right-hand normal points
+                // out of the material for both.
+                let n = [ab[1] / len, -ab[0] / len];
+                Edge {
+                    a,
+                    ab,
+                    inv_len2: 1.0 / len2,
+                    n,
+                    c: n[0] * a[0] + n[1] * a[1],
+                }
+            })
+            .collect();
+        let grid = Grid::build(&edges);
+        Ok(Self {
+            outer,
+            holes,
+            edges,
+            grid,
+        })
+    }
+
+    pub fn outer(&self) -> &[[f64; 2]] {
+        &self.outer
+    }
+
+    pub fn holes(&self) -> &[Vec<[f64; 2]>] {
+        &self.holes
+    }
+
+    pub fn edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Material area, µm² (outer minus holes).
+    pub fn area(&self) -> f64 {
+        signed_area(&self.outer) + self.holes.iter().map(|h| signed_area(h)).sum::<f64>()
+    }
+
+    /// True inside the material (inside the outer loop and outside every hole).
+    pub fn contains(&self, q: [f64; 2]) -> bool {
+        in_loop(&self.outer, q) && !self.holes.iter().any(|h| in_loop(h, q))
+    }
+
+    /// Nearest edge crossed by o + t·d, 0 < t ≤ t_max, ignoring edge `skip` (the one the ray
+    /// starts on: a straight ray cannot meet the same flat edge twice).
+    pub fn intersect(
+        &self,
+        o: [f64; 2],
+        d: [f64; 2],
+        t_max: f64,
+        skip: Option<u32>,
+    ) -> Option<EdgeHit> {
+        let g = &self.grid;
+        // Clip the ray to the grid's box (slab method).
+        let (mut t0, mut t1) = (0.0f64, t_max);
+        for k in 0..2 {
+            if d[k] == 0.0 {
+                if o[k] < g.min[k] || o[k] > g.max[k] {
+                    return None;
+                }
+            } else {
+                let inv = 1.0 / d[k];
+                let (mut ta, mut tb) = ((g.min[k] - o[k]) * inv, (g.max[k] - o[k]) * inv);
+                if ta > tb {
+                    std::mem::swap(&mut ta, &mut tb);
+                }
+                t0 = t0.max(ta);
+                t1 = t1.min(tb);
+            }
+        }
+        if t0 > t1 {
+            return None;
+        }
+        // Amanatides & Woo (1987) traversal.
+        let p = [o[0] + t0 * d[0], o[1] + t0 * d[1]];
+        let mut cell = [0usize; 2];
+        let mut step = [0isize; 2];
+        let mut t_next = [f64::INFINITY; 2];
+        let mut t_delta = [f64::INFINITY; 2];
+        for k in 0..2 {
+            let c = ((p[k] - g.min[k]) / g.cell[k]).floor();
+            cell[k] = (c.max(0.0) as usize).min(g.n[k] - 1);
+            if d[k] > 0.0 {
+                step[k] = 1;
+                t_delta[k] = g.cell[k] / d[k];
+                t_next[k] = (g.min[k] + (cell[k] + 1) as f64 * g.cell[k] - o[k]) / d[k];
+            } else if d[k] < 0.0 {
+                step[k] = -1;
+                t_delta[k] = -g.cell[k] / d[k];
+                t_next[k] = (g.min[k] + cell[k] as f64 * g.cell[k] - o[k]) / d[k];
+            }
+        }
+        let mut best: Option<EdgeHit> = None;
+        loop {
+            let ci = cell[1] * g.n[0] + cell[0];
+            for &e in &g.items[g.start[ci] as usize..g.start[ci + 1] as usize] {
+                if Some(e) == skip {
+                    continue;
+                }
+                let ed = &self.edges[e as usize];
+                let den = ed.n[0] * d[0] + ed.n[1] * d[1];
+                if den == 0.0 {
+                    continue;
+                }
+                let t = (ed.c - ed.n[0] * o[0] - ed.n[1] * o[1]) / den;
+                if t <= 0.0 || t > t_max || best.is_some_and(|b| t >= b.t) {
+                    continue;
+                }
+                let h = [o[0] + t * d[0] - ed.a[0], o[1] + t * d[1] - ed.a[1]];
+                let s = (h[0] * ed.ab[0] + h[1] * ed.ab[1]) * ed.inv_len2;
+                if (-1e-9..=1.0 + 1e-9).contains(&s) {
+                    best = Some(EdgeHit {
+                        t,
+                        id: e,
+                        n: ed.n,
+                        c: ed.c,
+                    });
+                }
+            }
+            let k = if t_next[0] < t_next[1] { 0 } else { 1 };
+            let t_exit = t_next[k];
+            if best.is_some_and(|b| b.t <= t_exit) || t_exit > t1 {
+                return best;
+            }
+            let nc = cell[k] as isize + step[k];
+            if nc < 0 || nc >= g.n[k] as isize {
+                return best;
+            }
+            cell[k] = nc as usize;
+            t_next[k] += t_delta[k];
+        }
+    }
+
+    /// Extent of the material along the unit vector `e`: (min, max) of q·e over the outline.
+    pub fn extent(&self, e: [f64; 2]) -> (f64, f64) {
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for v in &self.outer {
+            let x = v[0] * e[0] + v[1] * e[1];
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+        (lo, hi)
+    }
+
+    /// Largest distance of a vertex from the origin, µm.
+    pub fn bound_radius(&self) -> f64 {
+        self.outer
+            .iter()
+            .map(|v| v[0].hypot(v[1]))
+            .fold(0.0, f64::max)
+    }
+
+    /// The same outline scaled by `k` about the origin and shifted by `-shift` first.
+    pub fn transformed(&self, shift: [f64; 2], k: f64) -> Result<Self, SectionError> {
+        let f = |l: &Vec<[f64; 2]>| -> Vec<[f64; 2]> {
+            l.iter()
+                .map(|v| [(v[0] - shift[0]) * k, (v[1] - shift[1]) * k])
+                .collect()
+        };
+        Self::new(f(&self.outer), self.holes.iter().map(f).collect())
+    }
+
+    /// Area centroid of the material, µm.
+    pub fn centroid(&self) -> [f64; 2] {
+        let mut cx = 0.0;
+        let mut cy = 0.0;
+        let mut a = 0.0;
+        for l in std::iter::once(&self.outer).chain(self.holes.iter()) {
+            for i in 0..l.len() {
+                let (p, q) = (l[i], l[(i + 1) % l.len()]);
+                let cr = p[0] * q[1] - q[0] * p[1];
+                cx += (p[0] + q[0]) * cr;
+                cy += (p[1] + q[1]) * cr;
+                a += 0.5 * cr;
+            }
+        }
+        [cx / (6.0 * a), cy / (6.0 * a)]
+    }
+}
+
+/// Drops repeated vertices (including a closing vertex equal to the first).
+fn clean(mut l: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    l.dedup_by(|a, b| (a[0] - b[0]).abs() < 1e-12 && (a[1] - b[1]).abs() < 1e-12);
+    while l.len() > 1 {
+        let (f, b) = (l[0], l[l.len() - 1]);
+        if (f[0] - b[0]).abs() < 1e-12 && (f[1] - b[1]).abs() < 1e-12 {
+            l.pop();
+        } else {
+            break;
+        }
+    }
+    l
+}
+
+impl Grid {
+    /// About two edges per occupied cell: √E cells on the longer side of the box.
+    fn build(edges: &[Edge]) -> Self {
+        let mut min = [f64::INFINITY; 2];
+        let mut max = [f64::NEG_INFINITY; 2];
+        for e in edges {
+            for p in [e.a, [e.a[0] + e.ab[0], e.a[1] + e.ab[1]]] {
+                for k in 0..2 {
+                    min[k] = min[k].min(p[k]);
+                    max[k] = max[k].max(p[k]);
+                }
+            }
+        }
+        // Pad so points on the box edge fall inside.
+        let pad = 1e-6 * (max[0] - min[0]).max(max[1] - min[1]);
+        for k in 0..2 {
+            min[k] -= pad;
+            max[k] += pad;
+        }
+        let size = [max[0] - min[0], max[1] - min[1]];
+        let side = (edges.len() as f64).sqrt().clamp(1.0, 256.0);
+        let longer = size[0].max(size[1]);
+        let n = [
+            ((side * size[0] / longer).ceil() as usize).max(1),
+            ((side * size[1] / longer).ceil() as usize).max(1),
+        ];
+        let cell = [size[0] / n[0] as f64, size[1] / n[1] as f64];
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n[0] * n[1]];
+        for (i, e) in edges.iter().enumerate() {
+            let b = [e.a[0] + e.ab[0], e.a[1] + e.ab[1]];
+            let lo = |k: usize| {
+                (((e.a[k].min(b[k]) - min[k]) / cell[k]).floor().max(0.0) as usize).min(n[k] - 1)
+            };
+            let hi = |k: usize| {
+                (((e.a[k].max(b[k]) - min[k]) / cell[k]).floor().max(0.0) as usize).min(n[k] - 1)
+            };
+            for y in lo(1)..=hi(1) {
+                for x in lo(0)..=hi(0) {
+                    lists[y * n[0] + x].push(i as u32);
+                }
+            }
+        }
+        let mut start = Vec::with_capacity(lists.len() + 1);
+        let mut items = Vec::new();
+        start.push(0u32);
+        for l in &lists {
+            items.extend_from_slice(l);
+            start.push(items.len() as u32);
+        }
+        Self {
+            min,
+            max,
+            cell,
+            n,
+            start,
+            items,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ngon(n: usize, r: f64) -> Vec<[f64; 2]> {
+        (0..n)
+            .map(|i| {
+                let a = std::f64::consts::TAU * i as f64 / n as f64;
+                [r * a.cos(), r * a.sin()]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn grid_query_equals_brute_force() {
+        let p = Polygon::new(ngon(300, 5.0), vec![ngon(40, 1.5)]).unwrap();
+        let mut s = 12345u64;
+        let mut rnd = || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..2000 {
+            let o = [rnd() * 14.0 - 7.0, rnd() * 14.0 - 7.0];
+            let a = rnd() * std::f64::consts::TAU;
+            let d = [a.cos(), a.sin()];
+            let fast = p.intersect(o, d, f64::INFINITY, None).map(|h| (h.id, h.t));
+            let mut brute: Option<(u32, f64)> = None;
+            for (i, e) in p.edges.iter().enumerate() {
+                let den = e.n[0] * d[0] + e.n[1] * d[1];
+                let t = (e.c - e.n[0] * o[0] - e.n[1] * o[1]) / den;
+                let h = [o[0] + t * d[0] - e.a[0], o[1] + t * d[1] - e.a[1]];
+                let s = (h[0] * e.ab[0] + h[1] * e.ab[1]) * e.inv_len2;
+                if t > 0.0 && (0.0..=1.0).contains(&s) && brute.is_none_or(|b| t < b.1) {
+                    brute = Some((i as u32, t));
+                }
+            }
+            assert_eq!(fast.map(|f| f.0), brute.map(|b| b.0), "o={o:?} d={d:?}");
+        }
+    }
+
+    #[test]
+    fn area_and_orientation() {
+        let mut outer = ngon(4, 2.0);
+        outer.reverse();
+        let p = Polygon::new(outer, vec![ngon(4, 1.0)]).unwrap();
+        assert!((p.area() - (8.0 - 2.0)).abs() < 1e-12);
+        assert!(p.contains([1.5 * 0.5f64.sqrt() * 1.2, 0.0]));
+        assert!(!p.contains([0.0, 0.0]));
+    }
+
+    #[test]
+    fn rejects_self_intersection_and_stray_holes() {
+        let bow = vec![[0.0, 0.0], [1.0, 1.0], [1.0, 0.0], [0.0, 1.0]];
+        assert!(Polygon::new(bow, vec![]).is_err());
+        let stray = vec![[5.0, 5.0], [6.0, 5.0], [6.0, 6.0]];
+        assert!(Polygon::new(ngon(8, 1.0), vec![stray]).is_err());
+    }
+}

@@ -1,0 +1,405 @@
+//! Brute-force photon tracing through one straight fiber in the far field (§5.3.2): a beam of
+//! parallel rays as wide as the fiber's projection arrives from ωi; each photon random-walks
+//! through rough-dielectric reflections and refractions until it leaves, and is binned by its
+//! outgoing direction with the path length it travelled inside.
+//!
+//! The fiber is an extrusion along z, so a 3D ray meets it where its xy projection meets the
+//! section: the walk runs in 2D plus the axial component (the xy part of a unit direction
+//! advances the same ray parameter t, so 3D lengths come for free). Wool's cuticles scale the
+//! section along z; within one scale the ray's image in section coordinates (x/s, y/s) is
+//! again a straight segment (a projective map of a line), so the same 2D query serves.
+//!
+//! Absorption is applied afterwards from the recorded path length ([`super::Tally::score`]):
+//! the walk of a photon does not depend on μa, so one trace serves every dye, depth of shade
+//! and wavelength (Beer–Lambert weights exp(−μa·ℓ)).
+
+use std::time::Instant;
+
+use indicatif::ProgressBar;
+use rand_core::Rng;
+use rayon::prelude::*;
+
+use super::tally::{AngularGrid, Tally};
+use super::{Fiber, Section, Surface};
+use crate::transport::rng::{batch_rng, uniform, BatchRng};
+
+/// Photons per batch: one RNG stream and one partial tally each.
+pub const BATCH: u64 = 1 << 15;
+/// Batches traced in parallel before their tallies are added (in batch order).
+const GROUP: u64 = 32;
+/// Boundary events after which a photon is counted as lost (absorbed): far beyond any
+/// physical path (a photon trapped by total internal reflection in a perfect ellipse).
+pub const MAX_EVENTS: u32 = 10_000;
+
+/// The incident direction ωi (pointing towards the light).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Incident {
+    pub theta_rad: f64,
+    pub phi_rad: f64,
+}
+
+impl Incident {
+    pub fn from_deg(theta_deg: f64, phi_deg: f64) -> Self {
+        Self {
+            theta_rad: theta_deg.to_radians(),
+            phi_rad: phi_deg.to_radians(),
+        }
+    }
+}
+
+/// What to trace and score.
+#[derive(Debug, Clone)]
+pub struct TraceOptions {
+    /// Photons launched across the beam.
+    pub photons: u64,
+    pub seed: u64,
+    pub grid: AngularGrid,
+    /// Absorption coefficients to score from the one trace, per µm.
+    pub mua_per_um: Vec<f64>,
+    pub bar: Option<ProgressBar>,
+}
+
+/// A finished trace.
+#[derive(Debug, Clone)]
+pub struct TraceResult {
+    pub tally: Tally,
+    pub incident: Incident,
+    /// A(ωi): exact projected width per unit length from the outline, µm.
+    pub projected_width_um: f64,
+    /// Width of the launched beam, µm (≥ the projected width for cuticle scales).
+    pub beam_width_um: f64,
+    pub seconds: f64,
+}
+
+impl TraceResult {
+    /// Launched photons per second of wall time.
+    pub fn photons_per_s(&self) -> f64 {
+        self.tally.launched as f64 / self.seconds.max(1e-9)
+    }
+
+    /// Shadow width seen by the beam, estimated from the hit fraction, and its standard error.
+    pub fn intercepted_width_um(&self) -> (f64, f64) {
+        let n = self.tally.launched.max(1) as f64;
+        let p = self.tally.intercepted as f64 / n;
+        (
+            self.beam_width_um * p,
+            self.beam_width_um * (p * (1.0 - p) / n).sqrt(),
+        )
+    }
+}
+
+/// How one photon ended.
+enum Outcome {
+    Miss,
+    Exit { dir: [f64; 3], path_um: f64 },
+    Lost,
+}
+
+/// Per-trace constants.
+struct Setup<'a> {
+    section: &'a Section,
+    surface: Surface,
+    /// Unit direction of travel, −ωi.
+    d: [f64; 3],
+    /// Unit xy direction of travel and the beam's cross axis.
+    dhat: [f64; 2],
+    e_perp: [f64; 2],
+    beam: (f64, f64),
+    r_start: f64,
+    /// Cuticle: (scale length L, ds/dz, s_max, bounding radius of the section).
+    cuticle: Option<(f64, f64, f64, f64)>,
+}
+
+#[inline]
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Exit parameter of o + t·d from the circle of radius r about the origin, if the ray reaches
+/// the circle's inside at some t > 0.
+#[inline]
+fn circle_exit(o: [f64; 2], d: [f64; 2], r: f64) -> Option<f64> {
+    let a = d[0] * d[0] + d[1] * d[1];
+    if a == 0.0 {
+        return None;
+    }
+    let b = o[0] * d[0] + o[1] * d[1];
+    let c = o[0] * o[0] + o[1] * o[1] - r * r;
+    let disc = b * b - a * c;
+    if disc <= 0.0 {
+        return None;
+    }
+    let t = (-b + disc.sqrt()) / a;
+    (t > 0.0).then_some(t)
+}
+
+impl<'a> Setup<'a> {
+    fn new(fiber: &'a Fiber, inc: Incident) -> Self {
+        let (st, ct) = inc.theta_rad.sin_cos();
+        let (sp, cp) = inc.phi_rad.sin_cos();
+        let d = [-ct * cp, -ct * sp, -st];
+        let dhat = [-cp, -sp];
+        let e_perp = [-dhat[1], dhat[0]];
+        let cut = fiber.cuticle_slope();
+        let s_max = cut.map_or(1.0, |c| c.1);
+        let (lo, hi) = fiber.section.extent(e_perp);
+        let rb = fiber.section.bound_radius_um();
+        Self {
+            section: &fiber.section,
+            surface: fiber.surface,
+            d,
+            dhat,
+            e_perp,
+            beam: (lo * s_max, hi * s_max),
+            r_start: rb * s_max * 1.01 + 1.0,
+            cuticle: fiber
+                .cuticle
+                .zip(cut)
+                .map(|(c, (k, s))| (c.length_um, k, s, rb)),
+        }
+    }
+
+    /// One photon of the beam.
+    #[inline]
+    fn photon(&self, rng: &mut BatchRng) -> (Outcome, u32) {
+        let mut u = || uniform(rng.next_u64());
+        let h = self.beam.0 + (self.beam.1 - self.beam.0) * u();
+        let o = [
+            h * self.e_perp[0] - self.r_start * self.dhat[0],
+            h * self.e_perp[1] - self.r_start * self.dhat[1],
+        ];
+        match self.cuticle {
+            None => self.walk_straight(o, &mut u),
+            Some(c) => {
+                let z = c.0 * u();
+                self.walk_cuticle([o[0], o[1], z], c, &mut u)
+            }
+        }
+    }
+
+    /// The walk in a straight extrusion. Returns the outcome and the fallback count.
+    #[inline]
+    fn walk_straight(&self, mut p: [f64; 2], u: &mut impl FnMut() -> f64) -> (Outcome, u32) {
+        let mut dir = self.d;
+        let mut skip = None;
+        let mut inside = false;
+        let mut path = 0.0;
+        let mut events = 0u32;
+        let mut fallbacks = 0u32;
+        loop {
+            let d2 = [dir[0], dir[1]];
+            let Some(hit) = self.section.intersect(p, d2, f64::INFINITY, skip) else {
+                let o = if events == 0 {
+                    Outcome::Miss
+                } else if inside {
+                    Outcome::Lost
+                } else {
+                    Outcome::Exit { dir, path_um: path }
+                };
+                return (o, fallbacks);
+            };
+            p = [p[0] + hit.t * d2[0], p[1] + hit.t * d2[1]];
+            if inside {
+                path += hit.t;
+            }
+            let n_out = [hit.n[0], hit.n[1], 0.0];
+            let s = self.boundary(dir, n_out, u);
+            fallbacks += s.1 as u32;
+            dir = s.0;
+            inside = s.2;
+            skip = Some(hit.id);
+            events += 1;
+            if events >= MAX_EVENTS {
+                return (Outcome::Lost, fallbacks);
+            }
+        }
+    }
+
+    /// A boundary event at outward normal `n_out`: returns the new direction, whether the
+    /// fallback was used, and whether the photon is now inside. The side is read from the
+    /// direction, so a numerical slip cannot desynchronise it.
+    #[inline]
+    fn boundary(
+        &self,
+        dir: [f64; 3],
+        n_out: [f64; 3],
+        u: &mut impl FnMut() -> f64,
+    ) -> ([f64; 3], bool, bool) {
+        let from_inside = dot3(dir, n_out) > 0.0;
+        let nf = if from_inside {
+            [-n_out[0], -n_out[1], -n_out[2]]
+        } else {
+            n_out
+        };
+        let s = self.surface.scatter(dir, nf, from_inside, &mut *u);
+        (s.dir, s.fallback, from_inside != s.transmitted)
+    }
+
+    /// The walk along a fiber with cuticle scales: period by period (see [`super::Cuticle`]).
+    fn walk_cuticle(
+        &self,
+        mut p: [f64; 3],
+        (len, k, s_max, rb): (f64, f64, f64, f64),
+        u: &mut impl FnMut() -> f64,
+    ) -> (Outcome, u32) {
+        let mut dir = self.d;
+        let mut skip: Option<u32> = None;
+        let mut inside = false;
+        let mut path = 0.0;
+        let mut events = 0u32;
+        let mut fallbacks = 0u32;
+        let mut period = (p[2] / len).floor() as i64;
+        let r_bound = rb * s_max;
+        let finish = |events: u32, inside: bool, dir, path| {
+            if events == 0 {
+                Outcome::Miss
+            } else if inside {
+                Outcome::Lost
+            } else {
+                Outcome::Exit { dir, path_um: path }
+            }
+        };
+        for _ in 0..10_000_000u32 {
+            let z_lo = period as f64 * len;
+            let t_plane = if dir[2] > 0.0 {
+                (z_lo + len - p[2]) / dir[2]
+            } else if dir[2] < 0.0 {
+                (z_lo - p[2]) / dir[2]
+            } else {
+                f64::INFINITY
+            };
+            let Some(t_circle) = circle_exit([p[0], p[1]], [dir[0], dir[1]], r_bound) else {
+                return (finish(events, inside, dir, path), fallbacks);
+            };
+            let t1 = t_plane.min(t_circle);
+            let s0 = 1.0 + k * (p[2] - z_lo);
+            let p1 = [p[0] + t1 * dir[0], p[1] + t1 * dir[1], p[2] + t1 * dir[2]];
+            let s1 = 1.0 + k * (p1[2] - z_lo).clamp(0.0, len);
+            let q0 = [p[0] / s0, p[1] / s0];
+            let q1 = [p1[0] / s1, p1[1] / s1];
+            if let Some(hit) = self
+                .section
+                .intersect(q0, [q1[0] - q0[0], q1[1] - q0[1]], 1.0, skip)
+            {
+                // Back from the section's segment parameter to the ray's.
+                let uu = hit.t;
+                let tau = uu * s0 / ((1.0 - uu) * s1 + uu * s0);
+                let t = tau * t1;
+                p = [p[0] + t * dir[0], p[1] + t * dir[1], p[2] + t * dir[2]];
+                if inside {
+                    path += t;
+                }
+                // Surface n·(x, y) = c·s(z): gradient (n, −c·ds/dz).
+                let nz = -hit.c * k;
+                let inv = 1.0 / (1.0 + nz * nz).sqrt();
+                let n_out = [hit.n[0] * inv, hit.n[1] * inv, nz * inv];
+                let s = self.boundary(dir, n_out, u);
+                fallbacks += s.1 as u32;
+                dir = s.0;
+                inside = s.2;
+                skip = Some(hit.id);
+                events += 1;
+                if events >= MAX_EVENTS {
+                    return (Outcome::Lost, fallbacks);
+                }
+                continue;
+            }
+            if t_circle <= t_plane {
+                // Left the bounding cylinder without meeting the fiber.
+                return (finish(events, inside, dir, path), fallbacks);
+            }
+            // Cross the scale edge plane.
+            p = p1;
+            if inside {
+                path += t1;
+            }
+            let up = dir[2] > 0.0;
+            p[2] = if up { z_lo + len } else { z_lo };
+            let s_after = if up { 1.0 } else { s_max };
+            let inside_after = self.section.contains([p[0] / s_after, p[1] / s_after]);
+            skip = None;
+            if inside_after == inside {
+                period += if up { 1 } else { -1 };
+                continue;
+            }
+            // The step face of a scale edge, normal ±z, material on the photon's side if inside.
+            let sign = if up { 1.0 } else { -1.0 };
+            let n_out = if inside {
+                [0.0, 0.0, sign]
+            } else {
+                [0.0, 0.0, -sign]
+            };
+            let s = self.boundary(dir, n_out, u);
+            fallbacks += s.1 as u32;
+            let was_inside = inside;
+            dir = s.0;
+            inside = s.2;
+            if inside != was_inside {
+                period += if up { 1 } else { -1 };
+            }
+            events += 1;
+            if events >= MAX_EVENTS {
+                return (Outcome::Lost, fallbacks);
+            }
+        }
+        (Outcome::Lost, fallbacks)
+    }
+}
+
+/// Traces `o.photons` photons of the beam from `inc` through `fiber`. Batches run in parallel
+/// on the current rayon pool; batch b draws from `batch_rng(seed, b)` and partial tallies are
+/// added in batch order, so the result is bit-identical for any thread count.
+pub fn trace(fiber: &Fiber, inc: Incident, o: &TraceOptions) -> TraceResult {
+    let start = Instant::now();
+    let setup = Setup::new(fiber, inc);
+    let n_batches = o.photons.div_ceil(BATCH);
+    let mut total = Tally::new(o.grid, &o.mua_per_um);
+    let mut b0 = 0;
+    while b0 < n_batches {
+        let b1 = (b0 + GROUP).min(n_batches);
+        let parts: Vec<Tally> = (b0..b1)
+            .into_par_iter()
+            .map(|b| {
+                let n = BATCH.min(o.photons - b * BATCH);
+                let t = trace_batch(&setup, inc, o, b, n);
+                if let Some(bar) = &o.bar {
+                    bar.inc(n);
+                }
+                t
+            })
+            .collect();
+        for p in &parts {
+            total.merge(p);
+        }
+        b0 = b1;
+    }
+    TraceResult {
+        tally: total,
+        incident: inc,
+        projected_width_um: fiber.projected_width_um(inc.phi_rad),
+        beam_width_um: setup.beam.1 - setup.beam.0,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+fn trace_batch(setup: &Setup, inc: Incident, o: &TraceOptions, batch: u64, n: u64) -> Tally {
+    let mut rng = batch_rng(o.seed, batch);
+    let mut t = Tally::new(o.grid, &o.mua_per_um);
+    t.launched = n;
+    for _ in 0..n {
+        let (out, fb) = setup.photon(&mut rng);
+        t.fallbacks += fb as u64;
+        match out {
+            Outcome::Miss => {}
+            Outcome::Lost => {
+                t.intercepted += 1;
+                t.lost += 1;
+            }
+            Outcome::Exit { dir, path_um } => {
+                t.intercepted += 1;
+                t.score(o.grid.bin(dir, inc.phi_rad), path_um);
+            }
+        }
+    }
+    t
+}

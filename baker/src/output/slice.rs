@@ -1,0 +1,79 @@
+//! False-colour PNG of one outgoing slice of a fiber's scattering (like Table 8's plots): Δφ
+//! from −180° (left) to 180° (right), θo from +90° (top) to −90° (bottom), colour = log10 of
+//! the scattered intensity per solid angle divided by cos θo (a BCSDF value up to the
+//! incident normalisation), over five decades below the maximum; black where nothing landed.
+
+use std::path::Path;
+
+use crate::fiber::AngularGrid;
+
+/// Matplotlib's "inferno" colour map, sampled at nine stops (van der Walt & Smith, 2015).
+const INFERNO: [[f64; 3]; 9] = [
+    [0.0, 0.0, 4.0],
+    [31.0, 12.0, 72.0],
+    [85.0, 15.0, 109.0],
+    [136.0, 34.0, 106.0],
+    [186.0, 54.0, 85.0],
+    [227.0, 89.0, 51.0],
+    [249.0, 140.0, 10.0],
+    [249.0, 201.0, 50.0],
+    [252.0, 255.0, 164.0],
+];
+
+fn colour(t: f64) -> [u8; 3] {
+    let x = t.clamp(0.0, 1.0) * 8.0;
+    let i = (x as usize).min(7);
+    let f = x - i as f64;
+    let mut c = [0u8; 3];
+    for k in 0..3 {
+        c[k] = (INFERNO[i][k] + f * (INFERNO[i + 1][k] - INFERNO[i][k])).round() as u8;
+    }
+    c
+}
+
+/// Decades of dynamic range shown.
+pub const DECADES: f64 = 5.0;
+
+/// Writes `hist2d` (fractions per bin, θ row-major as in [`crate::fiber::Tally`]) to `path`,
+/// `px` pixels per bin, with a colour bar along the bottom.
+pub fn write_slice_png(
+    path: &Path,
+    grid: &AngularGrid,
+    hist2d: &[f64],
+    px: u32,
+) -> anyhow::Result<()> {
+    let (nt, np) = (grid.n_theta, grid.n_phi);
+    let value: Vec<f64> = (0..nt * np)
+        .map(|b| {
+            let it = b / np;
+            let t_mid = (-90.0 + (it as f64 + 0.5) * grid.res_deg).to_radians();
+            hist2d[b] / (grid.solid_angle(it) * t_mid.cos().max(1e-6))
+        })
+        .collect();
+    let vmax = value.iter().copied().fold(0.0, f64::max);
+    let (w, h_map) = (np as u32 * px, nt as u32 * px);
+    let bar = 16u32;
+    let h = h_map + bar;
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    for y in 0..h_map {
+        let it = nt - 1 - (y / px) as usize;
+        for x in 0..w {
+            let v = value[it * np + (x / px) as usize];
+            let c = if v > 0.0 && vmax > 0.0 {
+                colour(1.0 + (v / vmax).log10() / DECADES)
+            } else {
+                [0, 0, 0]
+            };
+            let o = ((y * w + x) * 3) as usize;
+            buf[o..o + 3].copy_from_slice(&c);
+        }
+    }
+    for y in h_map..h {
+        for x in 0..w {
+            let c = colour(x as f64 / (w - 1) as f64);
+            let o = ((y * w + x) * 3) as usize;
+            buf[o..o + 3].copy_from_slice(&c);
+        }
+    }
+    super::plot::write_png(path, w, h, buf)
+}
