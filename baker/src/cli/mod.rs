@@ -69,6 +69,41 @@ pub enum Command {
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Validate { spec } => {
+            let text = std::fs::read_to_string(&spec).unwrap_or_default();
+            if crate::spec::fiber::is_fiber_spec(&text) {
+                let s = crate::spec::fiber::load(&spec)
+                    .map_err(|e| UsageError(e.to_string().trim_end().to_string()))?;
+                outln!(
+                    "{}: ok, {} fibers, {} dyes (presets included)",
+                    spec.display(),
+                    s.fibers.len(),
+                    s.dyes.len()
+                )?;
+                for f in &s.fibers {
+                    outln!(
+                        "  {} (line {}): {}, {:.2} µm, area {:.1} µm², {} hole(s), η {:.4}, β {:.2}°{}{}",
+                        f.name,
+                        f.line,
+                        f.fiber_type.name,
+                        f.diameter_um,
+                        f.section.area_um2(),
+                        f.section.hole_count(),
+                        f.eta,
+                        f.beta_deg,
+                        f.cuticle.map_or(String::new(), |c| format!(
+                            ", cuticle {} µm × {}°",
+                            c.length_um, c.tilt_deg
+                        )),
+                        f.dye.as_ref().map_or(String::new(), |(d, z)| format!(
+                            ", {} at {}% (μa(550 nm) = {:.3} /mm)",
+                            d.name,
+                            z * 100.0,
+                            f.mua_per_um(550.0) * 1e3
+                        )),
+                    )?;
+                }
+                return Ok(());
+            }
             let s = load_spec(&spec)?;
             outln!(
                 "{}: ok, {} entries, {} wavelengths ({}–{} nm)",

@@ -106,9 +106,9 @@ impl Tally {
         }
     }
 
-    /// Scores one exiting photon.
+    /// Scores one exiting photon of weight `g` (1 for a single incident direction).
     #[inline]
-    pub fn score(&mut self, bin: u32, path_um: f64) {
+    pub fn score(&mut self, bin: u32, path_um: f64, g: f64) {
         let b = bin as usize;
         self.path_sum_um += path_um;
         self.path_sum2_um2 += path_um * path_um;
@@ -116,9 +116,9 @@ impl Tally {
             let mua = self.mua_per_um[k];
             // Beer–Lambert along the recorded path (§5.3.1): the walk itself does not depend on μa.
             let w = if mua == 0.0 {
-                1.0
+                g
             } else {
-                (-mua * path_um).exp()
+                g * (-mua * path_um).exp()
             };
             self.sum[k][b] += w;
             self.sum2[k][b] += w * w;

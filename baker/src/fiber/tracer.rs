@@ -36,6 +36,12 @@ pub const MAX_EVENTS: u32 = 10_000;
 pub struct Incident {
     pub theta_rad: f64,
     pub phi_rad: f64,
+    /// When set, (Δθ, Δφ) in radians: each photon's ωi is drawn uniformly over the solid angle
+    /// of the bin [θ ± Δθ/2] × [φ ± Δφ/2] and weighted by W(φ)·cos θ / (W(φc)·cos θc), the
+    /// power the fiber intercepts from there relative to the bin centre. Outgoing Δφ is then
+    /// measured from the centre φc, so the table is a bin-to-bin average (as a 4D table
+    /// needs; also what makes reciprocity testable bin against bin).
+    pub spread: Option<(f64, f64)>,
 }
 
 impl Incident {
@@ -43,7 +49,14 @@ impl Incident {
         Self {
             theta_rad: theta_deg.to_radians(),
             phi_rad: phi_deg.to_radians(),
+            spread: None,
         }
+    }
+
+    /// The same centre, averaged over a bin of `dtheta_deg` × `dphi_deg`.
+    pub fn with_spread_deg(mut self, dtheta_deg: f64, dphi_deg: f64) -> Self {
+        self.spread = Some((dtheta_deg.to_radians(), dphi_deg.to_radians()));
+        self
     }
 }
 
@@ -98,6 +111,10 @@ enum Outcome {
 /// Per-trace constants.
 struct Setup<'a> {
     section: &'a Section,
+    inc: Incident,
+    s_max: f64,
+    /// W(φc)·cos θc, the normalisation of spread weights.
+    w_centre: f64,
     surface: Surface,
     /// Unit direction of travel, −ωi.
     d: [f64; 3],
@@ -146,6 +163,9 @@ impl<'a> Setup<'a> {
         let rb = fiber.section.bound_radius_um();
         Self {
             section: &fiber.section,
+            inc,
+            s_max,
+            w_centre: (hi - lo) * s_max * ct,
             surface: fiber.surface,
             d,
             dhat,
@@ -159,28 +179,53 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// One photon of the beam.
+    /// One photon of the beam: its outcome, fallback count and weight.
     #[inline]
-    fn photon(&self, rng: &mut BatchRng) -> (Outcome, u32) {
+    fn photon(&self, rng: &mut BatchRng) -> (Outcome, u32, f64) {
         let mut u = || uniform(rng.next_u64());
-        let h = self.beam.0 + (self.beam.1 - self.beam.0) * u();
+        let (d, dhat, e_perp, beam, g) = match self.inc.spread {
+            None => (self.d, self.dhat, self.e_perp, self.beam, 1.0),
+            Some((dt, dp)) => {
+                // Uniform in solid angle: uniform in sin θ and φ.
+                let (s0, s1) = (
+                    (self.inc.theta_rad - 0.5 * dt).sin(),
+                    (self.inc.theta_rad + 0.5 * dt).sin(),
+                );
+                let st = s0 + (s1 - s0) * u();
+                let ct = (1.0 - st * st).max(0.0).sqrt();
+                let phi = self.inc.phi_rad + dp * (u() - 0.5);
+                let (sp, cp) = phi.sin_cos();
+                let dhat = [-cp, -sp];
+                let e_perp = [sp, -cp];
+                let (lo, hi) = self.section.extent(e_perp);
+                let beam = (lo * self.s_max, hi * self.s_max);
+                let g = (beam.1 - beam.0) * ct / self.w_centre;
+                ([-ct * cp, -ct * sp, -st], dhat, e_perp, beam, g)
+            }
+        };
+        let h = beam.0 + (beam.1 - beam.0) * u();
         let o = [
-            h * self.e_perp[0] - self.r_start * self.dhat[0],
-            h * self.e_perp[1] - self.r_start * self.dhat[1],
+            h * e_perp[0] - self.r_start * dhat[0],
+            h * e_perp[1] - self.r_start * dhat[1],
         ];
-        match self.cuticle {
-            None => self.walk_straight(o, &mut u),
+        let (out, fb) = match self.cuticle {
+            None => self.walk_straight(o, d, &mut u),
             Some(c) => {
                 let z = c.0 * u();
-                self.walk_cuticle([o[0], o[1], z], c, &mut u)
+                self.walk_cuticle([o[0], o[1], z], d, c, &mut u)
             }
-        }
+        };
+        (out, fb, g)
     }
 
     /// The walk in a straight extrusion. Returns the outcome and the fallback count.
     #[inline]
-    fn walk_straight(&self, mut p: [f64; 2], u: &mut impl FnMut() -> f64) -> (Outcome, u32) {
-        let mut dir = self.d;
+    fn walk_straight(
+        &self,
+        mut p: [f64; 2],
+        mut dir: [f64; 3],
+        u: &mut impl FnMut() -> f64,
+    ) -> (Outcome, u32) {
         let mut skip = None;
         let mut inside = false;
         let mut path = 0.0;
@@ -239,10 +284,10 @@ impl<'a> Setup<'a> {
     fn walk_cuticle(
         &self,
         mut p: [f64; 3],
+        mut dir: [f64; 3],
         (len, k, s_max, rb): (f64, f64, f64, f64),
         u: &mut impl FnMut() -> f64,
     ) -> (Outcome, u32) {
-        let mut dir = self.d;
         let mut skip: Option<u32> = None;
         let mut inside = false;
         let mut path = 0.0;
@@ -387,7 +432,7 @@ fn trace_batch(setup: &Setup, inc: Incident, o: &TraceOptions, batch: u64, n: u6
     let mut t = Tally::new(o.grid, &o.mua_per_um);
     t.launched = n;
     for _ in 0..n {
-        let (out, fb) = setup.photon(&mut rng);
+        let (out, fb, g) = setup.photon(&mut rng);
         t.fallbacks += fb as u64;
         match out {
             Outcome::Miss => {}
@@ -397,7 +442,7 @@ fn trace_batch(setup: &Setup, inc: Incident, o: &TraceOptions, batch: u64, n: u6
             }
             Outcome::Exit { dir, path_um } => {
                 t.intercepted += 1;
-                t.score(o.grid.bin(dir, inc.phi_rad), path_um);
+                t.score(o.grid.bin(dir, inc.phi_rad), path_um, g);
             }
         }
     }
