@@ -17,6 +17,28 @@ pub enum FiberCommand {
     /// Trace a beam from one direction ωi through one fiber: albedo, projected area,
     /// photons/s, and the outgoing distribution over (θo, Δφ).
     Trace(TraceArgs),
+    /// Tracer throughput (photons/s) for each fiber of a spec (default `specs/fibers.yaml`)
+    /// and a smooth circular fiber, at each thread count.
+    Bench(BenchArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Fiber spec whose entries are measured.
+    #[arg(default_value = "specs/fibers.yaml")]
+    pub spec: PathBuf,
+    /// Photons per measurement.
+    #[arg(long, default_value_t = 4_000_000)]
+    pub photons: u64,
+    /// Thread counts to measure, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub threads: Vec<usize>,
+    /// Repetitions per measurement (the best is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+    /// Incident θi, degrees.
+    #[arg(long, allow_hyphen_values = true, default_value_t = -45.0)]
+    pub theta_i: f64,
 }
 
 #[derive(Debug, Args)]
@@ -86,7 +108,61 @@ pub struct TraceArgs {
 pub fn run(c: FiberCommand) -> anyhow::Result<()> {
     match c {
         FiberCommand::Trace(a) => run_trace(a),
+        FiberCommand::Bench(a) => run_bench(a),
     }
+}
+
+fn run_bench(a: BenchArgs) -> anyhow::Result<()> {
+    let s = fspec::load(&a.spec).map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+    let smooth = Fiber {
+        section: Section::circle(10.0),
+        surface: Surface {
+            eta: 1.55,
+            alpha: 0.0,
+        },
+        cuticle: None,
+    };
+    let mut cases = vec![("smooth circle (10 µm, η 1.55)".to_string(), smooth, 0.0)];
+    for e in &s.fibers {
+        cases.push((e.name.clone(), e.fiber(), e.mua_per_um(550.0)));
+    }
+    outln!(
+        "fiber tracer throughput, θi = {}°, {} photons, best of {}",
+        a.theta_i,
+        a.photons,
+        a.repeat
+    )?;
+    out!("{:<32} {:>10} {:>8}", "fiber", "edges", "holes")?;
+    for t in &a.threads {
+        out!(" {:>14}", format!("{t} thr M/s"))?;
+    }
+    outln!()?;
+    for (name, f, mua) in &cases {
+        let edges = match &f.section {
+            Section::Polygon(p) => p.edge_count().to_string(),
+            Section::Conic { .. } => "conic".into(),
+        };
+        out!("{name:<32} {edges:>10} {:>8}", f.section.hole_count())?;
+        for &t in &a.threads {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build()?;
+            let o = TraceOptions {
+                photons: a.photons,
+                seed: 1,
+                grid: AngularGrid::new(2.0).map_err(usage)?,
+                mua_per_um: vec![*mua],
+                bar: None,
+            };
+            let best = (0..a.repeat.max(1))
+                .map(|_| {
+                    pool.install(|| trace(f, Incident::from_deg(a.theta_i, 30.0), &o))
+                        .photons_per_s()
+                })
+                .fold(0.0, f64::max);
+            out!(" {:>14.3}", best / 1e6)?;
+        }
+        outln!()?;
+    }
+    Ok(())
 }
 
 fn usage(m: impl Into<String>) -> anyhow::Error {

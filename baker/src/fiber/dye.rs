@@ -2,7 +2,7 @@
 //! κ = ρ·ζ (fiber density ρ, depth of shade ζ) and the dye's extinction per mass ε(λ).
 //!
 //! Units follow the thesis: ε in l mg⁻¹ cm⁻¹ (its class ranges: reactive 0.005–0.0158,
-//! disperse 0.045–0.246 [174, 102]), ρ in g/cm³ (= 10⁶ mg/l), so
+//! disperse 0.045–0.246 \[174, 102\]), ρ in g/cm³ (= 10⁶ mg/l), so
 //! μa [cm⁻¹] = ρ·10⁶·ζ·ε. The thesis applies ε as-is (no ln 10 for decadic data): its Fig. 61
 //! quotes μa = 84.68 mm⁻¹ for silk (ρ = 1.34) at ζ = 4 % with ε = 0.0158, which is exactly
 //! ρζε; we do the same so that tables match the thesis.
@@ -25,7 +25,7 @@ impl DyeClass {
         ("disperse", DyeClass::Disperse),
     ];
 
-    /// Peak extinction range, l mg⁻¹ cm⁻¹ (§5.3.1, [174, 102]).
+    /// Peak extinction range, l mg⁻¹ cm⁻¹ (§5.3.1, \[174, 102\]).
     pub fn peak_range(self) -> (f64, f64) {
         match self {
             DyeClass::Reactive => (0.005, 0.0158),
@@ -115,7 +115,7 @@ pub fn mua_per_mm(density_g_per_cm3: f64, dos: f64, eps_l_per_mg_cm: f64) -> f64
     density_g_per_cm3 * 1e6 * dos * eps_l_per_mg_cm / 10.0
 }
 
-/// Depth-of-shade range, fraction: 0.1 % (pale) to 4 % (deep) (§5.3.1, [166]).
+/// Depth-of-shade range, fraction: 0.1 % (pale) to 4 % (deep) (§5.3.1, \[166\]).
 pub const DOS_RANGE: (f64, f64) = (0.001, 0.04);
 
 const PRESETS_CSV: &str = include_str!("data/dye_presets.csv");

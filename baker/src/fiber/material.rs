@@ -1,5 +1,5 @@
 //! The four fiber types of Table 9: diameter, density, refractive indices and roughness
-//! measured in the textile literature (Trotman [219]; Hearle & Morton [104]; [90, 137]).
+//! measured in the textile literature (Trotman \[219\]; Hearle & Morton \[104\]; \[90, 137\]).
 
 use super::section::generate::Shape;
 
@@ -7,14 +7,14 @@ use super::section::generate::Shape;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FiberType {
     pub name: &'static str,
-    /// Diameter range, µm (Table 9, Trotman [219]).
+    /// Diameter range, µm (Table 9, Trotman \[219\]).
     pub diameter_um: (f64, f64),
-    /// Density at 65 % RH, 20 °C, g/cm³ (Table 9, Hearle & Morton [104]).
+    /// Density at 65 % RH, 20 °C, g/cm³ (Table 9, Hearle & Morton \[104\]).
     pub density_g_per_cm3: f64,
-    /// η∥, η⊥ (Table 9, [104]).
+    /// η∥, η⊥ (Table 9, \[104\]).
     pub eta_parallel: f64,
     pub eta_perpendicular: f64,
-    /// Ra range, nm, and profile length l, nm (Table 9, [90, 137]).
+    /// Ra range, nm, and profile length l, nm (Table 9, \[90, 137\]).
     pub ra_nm: (f64, f64),
     pub l_nm: f64,
     /// Table 9's β column, degrees.
@@ -111,10 +111,10 @@ pub fn fiber_type(name: &str) -> Option<&'static FiberType> {
 
 /// Default cuticle scale interval along the wool fiber, µm: fine wools show 8–11 scale edges per
 /// 100 µm (Wildman, "The Microscopy of Animal Textile Fibres", WIRA 1954; Hearle & Morton
-/// [104]), so about 10 µm.
+/// \[104\]), so about 10 µm.
 pub const WOOL_SCALE_LENGTH_UM: f64 = 10.0;
 /// Default cuticle tilt, degrees: scale edges rise 0.5–1 µm over a scale, the ~3° tilt used
-/// for the cuticles of human hair by Marschner et al. 2003 (α = −2° to −4° there) [148].
+/// for the cuticles of human hair by Marschner et al. 2003 (α = −2° to −4° there) \[148\].
 pub const WOOL_SCALE_TILT_DEG: f64 = 3.0;
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 //! requested diameter (Table 9 diameters are microscope widths).
 //!
 //! Shape parameters are our reading of the SEM literature the thesis cites (Hearle & Morton
-//! [104]; Trotman [219]), stated per generator below; the ranges are deliberately wide so
+//! \[104\]; Trotman \[219\]), stated per generator below; the ranges are deliberately wide so
 //! that a set of seeded variants spans the variability of Fig. 64.
 
 use std::f64::consts::{PI, TAU};

@@ -8,6 +8,9 @@ use contour::ContourBuilder;
 
 use super::{Polygon, Section, SectionError};
 
+/// A closed outline, pixel or µm coordinates.
+type Loop = Vec<[f64; 2]>;
+
 /// How a mask becomes a section.
 #[derive(Debug, Clone, Copy)]
 pub struct MaskOptions {
@@ -96,7 +99,7 @@ pub fn from_pixels(
     let contours = ContourBuilder::new(pw, ph, true)
         .contours(&v, &[0.5])
         .map_err(|e| err(format!("contour extraction failed: {e:?}")))?;
-    let mut polys: Vec<(f64, Vec<[f64; 2]>, Vec<Vec<[f64; 2]>>)> = Vec::new();
+    let mut polys: Vec<(f64, Loop, Vec<Loop>)> = Vec::new();
     for c in &contours {
         for p in c.geometry().0.iter() {
             let outer: Vec<[f64; 2]> = p.exterior().0.iter().map(|c| [c.x, c.y]).collect();
