@@ -8,7 +8,7 @@ use serde::Deserialize;
 
 use super::error::{SpecError, SpecErrors};
 use super::raw::Spanned;
-use super::resolve::{describe_syntax_error, loc, Ctx};
+use super::resolve::{loc, parse_yaml, Ctx};
 use crate::fiber::dye::{self, Band, Dye, DyeClass, Spectrum};
 use crate::fiber::material::{
     fiber_type, FiberType, TABLE_9, WOOL_SCALE_LENGTH_UM, WOOL_SCALE_TILT_DEG,
@@ -177,18 +177,7 @@ pub fn load(path: &Path) -> Result<FiberSpec, SpecErrors> {
 
 /// Validates fiber-spec text; files it names are looked up relative to `dir`.
 pub fn load_str(file: &str, text: &str, dir: &Path) -> Result<FiberSpec, SpecErrors> {
-    let raw: RawFiberSpec = serde_saphyr::from_str(text).map_err(|e| {
-        let (line, column) = e
-            .location()
-            .map(|l| (l.line(), l.column()))
-            .unwrap_or((0, 0));
-        SpecErrors(vec![SpecError::Syntax {
-            file: file.to_string(),
-            line,
-            column,
-            message: describe_syntax_error(text, line, &e.to_string()),
-        }])
-    })?;
+    let raw: RawFiberSpec = parse_yaml(file, text)?;
     let mut cx = Ctx {
         file: file.to_string(),
         errors: Vec::new(),

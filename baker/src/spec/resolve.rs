@@ -88,18 +88,7 @@ pub fn load(path: &Path) -> Result<SkinSpec, SpecErrors> {
 
 /// Validates spec text; `file` names it in messages.
 pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
-    let raw: RawSpec = serde_saphyr::from_str(text).map_err(|e| {
-        let (line, column) = e
-            .location()
-            .map(|l| (l.line(), l.column()))
-            .unwrap_or((0, 0));
-        SpecErrors(vec![SpecError::Syntax {
-            file: file.to_string(),
-            line,
-            column,
-            message: describe_syntax_error(text, line, &e.to_string()),
-        }])
-    })?;
+    let raw: RawSpec = parse_yaml(file, text)?;
     let mut cx = Ctx {
         file: file.to_string(),
         errors: Vec::new(),
@@ -112,9 +101,28 @@ pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
     }
 }
 
+/// Parses spec text into its raw serde form; a syntax or type error names file:line:column.
+pub(super) fn parse_yaml<T: serde::de::DeserializeOwned>(
+    file: &str,
+    text: &str,
+) -> Result<T, SpecErrors> {
+    serde_saphyr::from_str(text).map_err(|e| {
+        let (line, column) = e
+            .location()
+            .map(|l| (l.line(), l.column()))
+            .unwrap_or((0, 0));
+        SpecErrors(vec![SpecError::Syntax {
+            file: file.to_string(),
+            line,
+            column,
+            message: describe_syntax_error(text, line, &e.to_string()),
+        }])
+    })
+}
+
 /// serde-saphyr's message without its own "error: line L column C:" prefix and source snippet
 /// (we print file:line:column), prefixed with the field when the message lacks it.
-pub(super) fn describe_syntax_error(text: &str, line: u64, message: &str) -> String {
+fn describe_syntax_error(text: &str, line: u64, message: &str) -> String {
     let mut m = message.lines().next().unwrap_or(message).trim();
     m = m.strip_prefix("error:").unwrap_or(m).trim();
     if let Some(rest) = m.strip_prefix("line ") {
