@@ -3,9 +3,11 @@
 //! This crate has no heavy dependencies (no HDF5, no rayon, no physics): a renderer links it
 //! to read what the baker writes. Each format documents its layout in its module.
 
+pub mod bcsdf;
 pub mod optics;
 pub mod table;
 
+pub use bcsdf::{Bcsdf, Precision};
 pub use optics::{
     OpticsDocument, OpticsEntry, OpticsError, OpticsJunction, OpticsLayer, OpticsSurface,
 };

@@ -61,25 +61,78 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
     let specs = a
         .specs
         .iter()
-        .map(|p| load_spec(p))
+        .map(|p| {
+            let text = std::fs::read_to_string(p).unwrap_or_default();
+            if crate::spec::fiber::is_fiber_spec(&text) {
+                crate::spec::fiber::load(p)
+                    .map(Loaded::Fiber)
+                    .map_err(|e| UsageError(e.to_string().trim_end().to_string()).into())
+            } else {
+                load_spec(p).map(Loaded::Skin)
+            }
+        })
         .collect::<anyhow::Result<Vec<_>>>()?;
-    for s in &specs {
+    if !a.entries.is_empty() {
+        // With several specs an entry may live in any of them; each name must exist somewhere.
+        let names: Vec<(String, String)> = specs
+            .iter()
+            .flat_map(|s| match s {
+                Loaded::Skin(s) => s
+                    .entries
+                    .iter()
+                    .map(|e| (s.file.clone(), e.name.clone()))
+                    .collect::<Vec<_>>(),
+                Loaded::Fiber(s) => s
+                    .fibers
+                    .iter()
+                    .map(|e| (s.file.clone(), e.name.clone()))
+                    .collect(),
+            })
+            .collect();
         for name in &a.entries {
-            if !s.entries.iter().any(|e| &e.name == name) {
-                let names: Vec<&str> = s.entries.iter().map(|e| e.name.as_str()).collect();
+            if !names.iter().any(|(_, n)| n == name) {
+                let all: Vec<&str> = names.iter().map(|(_, n)| n.as_str()).collect();
                 return Err(UsageError(format!(
                     "{}: no entry named {name:?}; entries: {}",
-                    s.file,
-                    names.join(", ")
+                    a.specs
+                        .iter()
+                        .map(|p| p.display().to_string())
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    all.join(", ")
                 ))
                 .into());
             }
         }
     }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads.unwrap_or(0))
+        .build()?;
     for (path, spec) in a.specs.iter().zip(&specs) {
-        bake_spec(&a, path, spec)?;
+        match spec {
+            Loaded::Skin(s) => {
+                let has =
+                    a.entries.is_empty() || s.entries.iter().any(|e| a.entries.contains(&e.name));
+                if has {
+                    bake_spec(&a, path, s)?
+                }
+            }
+            Loaded::Fiber(s) => {
+                let has =
+                    a.entries.is_empty() || s.fibers.iter().any(|e| a.entries.contains(&e.name));
+                if has {
+                    pool.install(|| super::bake_fiber::bake_fiber_spec(&a, path, s))?
+                }
+            }
+        }
     }
     Ok(())
+}
+
+/// A spec of either kind.
+enum Loaded {
+    Skin(SkinSpec),
+    Fiber(crate::spec::fiber::FiberSpec),
 }
 
 fn say(a: &BakeArgs, msg: impl AsRef<str>) {

@@ -17,6 +17,7 @@ macro_rules! out {
 }
 
 mod bake;
+mod bake_fiber;
 mod bench;
 mod fiber;
 mod mc;

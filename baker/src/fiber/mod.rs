@@ -6,10 +6,13 @@
 //! Conventions (also in README "Fibers"): fiber axis +z; ωi points towards the light, ωo is
 //! the direction a photon leaves in; θ = asin(ω·z), φ = atan2(ω·y, ω·x). Lengths in µm.
 
+pub mod bake;
 pub mod dye;
 pub mod material;
 pub mod section;
 pub mod surface;
+pub mod sweep;
+pub mod symmetry;
 pub mod tally;
 pub mod tracer;
 

@@ -101,15 +101,48 @@ impl TraceResult {
     }
 }
 
-/// How one photon ended.
-enum Outcome {
-    Miss,
-    Exit { dir: [f64; 3], path_um: f64 },
-    Lost,
+/// The state of one photon branch.
+#[derive(Debug, Clone, Copy)]
+struct Ray {
+    p: [f64; 3],
+    dir: [f64; 3],
+    inside: bool,
+    /// Path travelled inside the fiber so far, µm.
+    path: f64,
+    events: u32,
+    skip: Option<u32>,
+    /// Cuticle period the photon is in (straight fibers ignore it).
+    period: i64,
+    /// Weight of the branch (1 for an unsplit photon).
+    w: f64,
 }
 
+/// What one photon (with all its branches) did, besides what it emitted.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PhotonStats {
+    /// The beam met the fiber.
+    pub hit: bool,
+    /// Weight stopped by the event limit (counted as absorbed).
+    pub lost: f64,
+    pub fallbacks: u32,
+    /// Launch weight of the photon (the spread weight g; 1 without spread).
+    pub g: f64,
+}
+
+impl PhotonStats {
+    fn add(&mut self, o: PhotonStats) {
+        self.hit |= o.hit;
+        self.lost += o.lost;
+        self.fallbacks += o.fallbacks;
+    }
+}
+
+/// Weight below which a split photon plays Russian roulette (survives with probability
+/// w / [`ROULETTE_W`] at weight [`ROULETTE_W`]: unbiased).
+const ROULETTE_W: f64 = 1e-3;
+
 /// Per-trace constants.
-struct Setup<'a> {
+pub(crate) struct Setup<'a> {
     section: &'a Section,
     inc: Incident,
     s_max: f64,
@@ -151,7 +184,7 @@ fn circle_exit(o: [f64; 2], d: [f64; 2], r: f64) -> Option<f64> {
 }
 
 impl<'a> Setup<'a> {
-    fn new(fiber: &'a Fiber, inc: Incident) -> Self {
+    pub(crate) fn new(fiber: &'a Fiber, inc: Incident) -> Self {
         let (st, ct) = inc.theta_rad.sin_cos();
         let (sp, cp) = inc.phi_rad.sin_cos();
         let d = [-ct * cp, -ct * sp, -st];
@@ -179,9 +212,23 @@ impl<'a> Setup<'a> {
         }
     }
 
-    /// One photon of the beam: its outcome, fallback count and weight.
+    /// Width of the launched beam at the centre direction, µm.
+    pub(crate) fn beam_width_um(&self) -> f64 {
+        self.beam.1 - self.beam.0
+    }
+
+    /// One photon of the beam. `offset` places it across the beam (uniform in [0, 1); drawn
+    /// when `None`); `split` > 1 splits every boundary event of the photon's main path into
+    /// that many draws (see [`TraceOptions::split`]). `emit(dir, path_um, weight)` receives
+    /// every branch that leaves; the weights include the spread weight.
     #[inline]
-    fn photon(&self, rng: &mut BatchRng) -> (Outcome, u32, f64) {
+    pub(crate) fn photon(
+        &self,
+        rng: &mut BatchRng,
+        offset: Option<f64>,
+        split: u32,
+        emit: &mut impl FnMut([f64; 3], f64, f64),
+    ) -> PhotonStats {
         let mut u = || uniform(rng.next_u64());
         let (d, dhat, e_perp, beam, g) = match self.inc.spread {
             None => (self.d, self.dhat, self.e_perp, self.beam, 1.0),
@@ -203,61 +250,126 @@ impl<'a> Setup<'a> {
                 ([-ct * cp, -ct * sp, -st], dhat, e_perp, beam, g)
             }
         };
-        let h = beam.0 + (beam.1 - beam.0) * u();
+        let f = offset.unwrap_or_else(&mut u);
+        let h = beam.0 + (beam.1 - beam.0) * f;
         let o = [
             h * e_perp[0] - self.r_start * dhat[0],
             h * e_perp[1] - self.r_start * dhat[1],
         ];
-        let (out, fb) = match self.cuticle {
-            None => self.walk_straight(o, d, &mut u),
-            Some(c) => {
-                let z = c.0 * u();
-                self.walk_cuticle([o[0], o[1], z], d, c, &mut u)
-            }
+        let z = self.cuticle.map_or(0.0, |c| c.0 * u());
+        let ray = Ray {
+            p: [o[0], o[1], z],
+            dir: d,
+            inside: false,
+            path: 0.0,
+            events: 0,
+            skip: None,
+            period: self.cuticle.map_or(0, |c| (z / c.0).floor() as i64),
+            w: g,
         };
-        (out, fb, g)
+        let mut st = self.walk(ray, split.max(1), &mut u, emit);
+        st.g = g;
+        st
     }
 
-    /// The walk in a straight extrusion. Returns the outcome and the fallback count.
-    #[inline]
-    fn walk_straight(
+    /// Follows a branch until it leaves (emitting it), is lost, or ends in roulette.
+    fn walk(
         &self,
-        mut p: [f64; 2],
-        mut dir: [f64; 3],
+        mut ray: Ray,
+        split: u32,
         u: &mut impl FnMut() -> f64,
-    ) -> (Outcome, u32) {
-        let mut skip = None;
-        let mut inside = false;
-        let mut path = 0.0;
-        let mut events = 0u32;
-        let mut fallbacks = 0u32;
+        emit: &mut impl FnMut([f64; 3], f64, f64),
+    ) -> PhotonStats {
+        let mut st = PhotonStats::default();
         loop {
-            let d2 = [dir[0], dir[1]];
-            let Some(hit) = self.section.intersect(p, d2, f64::INFINITY, skip) else {
-                let o = if events == 0 {
-                    Outcome::Miss
-                } else if inside {
-                    Outcome::Lost
-                } else {
-                    Outcome::Exit { dir, path_um: path }
-                };
-                return (o, fallbacks);
+            let Some((n_out, id, step)) = (match self.cuticle {
+                None => self.advance_straight(&mut ray),
+                Some(c) => self.advance_cuticle(&mut ray, c),
+            }) else {
+                // Left the fiber's neighbourhood.
+                if ray.events > 0 {
+                    st.hit = true;
+                    if ray.inside {
+                        st.lost += ray.w;
+                    } else {
+                        emit(ray.dir, ray.path, ray.w);
+                    }
+                }
+                return st;
             };
-            p = [p[0] + hit.t * d2[0], p[1] + hit.t * d2[1]];
-            if inside {
-                path += hit.t;
+            st.hit = true;
+            ray.events += 1;
+            if ray.events >= MAX_EVENTS {
+                st.lost += ray.w;
+                return st;
             }
-            let n_out = [hit.n[0], hit.n[1], 0.0];
-            let s = self.boundary(dir, n_out, u);
-            fallbacks += s.1 as u32;
-            dir = s.0;
-            inside = s.2;
-            skip = Some(hit.id);
-            events += 1;
-            if events >= MAX_EVENTS {
-                return (Outcome::Lost, fallbacks);
+            if split <= 1 {
+                let s = self.boundary(ray.dir, n_out, u);
+                st.fallbacks += s.1 as u32;
+                if s.2 != ray.inside {
+                    ray.period += step;
+                }
+                ray.dir = s.0;
+                ray.inside = s.2;
+                ray.skip = id;
+                continue;
+            }
+            // Splitting: `split` draws of the event; the branches that leave are followed
+            // (unsplit) at weight w/split, one of the m that enter continues at weight
+            // w·m/split (picked uniformly: unbiased for the sum of the m).
+            let mut m = 0u32;
+            let mut chosen = None;
+            let kw = ray.w / split as f64;
+            for _ in 0..split {
+                let s = self.boundary(ray.dir, n_out, u);
+                st.fallbacks += s.1 as u32;
+                if s.2 {
+                    m += 1;
+                    if m == 1 || u() * (m as f64) < 1.0 {
+                        chosen = Some(s.0);
+                    }
+                } else {
+                    let child = Ray {
+                        dir: s.0,
+                        inside: false,
+                        skip: id,
+                        w: kw,
+                        period: ray.period + if ray.inside { step } else { 0 },
+                        ..ray
+                    };
+                    st.add(self.walk(child, 1, u, emit));
+                }
+            }
+            let Some(d) = chosen else { return st };
+            if !ray.inside {
+                ray.period += step;
+            }
+            ray.dir = d;
+            ray.inside = true;
+            ray.skip = id;
+            ray.w *= m as f64 / split as f64;
+            if ray.w < ROULETTE_W {
+                if u() * ROULETTE_W < ray.w {
+                    ray.w = ROULETTE_W;
+                } else {
+                    return st;
+                }
             }
         }
+    }
+
+    /// Moves a ray in a straight extrusion to its next boundary event: returns the outward
+    /// normal and the edge id, or `None` when nothing is hit.
+    #[inline]
+    fn advance_straight(&self, ray: &mut Ray) -> Option<([f64; 3], Option<u32>, i64)> {
+        let d2 = [ray.dir[0], ray.dir[1]];
+        let p = [ray.p[0], ray.p[1]];
+        let hit = self.section.intersect(p, d2, f64::INFINITY, ray.skip)?;
+        ray.p = [p[0] + hit.t * d2[0], p[1] + hit.t * d2[1], 0.0];
+        if ray.inside {
+            ray.path += hit.t;
+        }
+        Some(([hit.n[0], hit.n[1], 0.0], Some(hit.id), 0))
     }
 
     /// A boundary event at outward normal `n_out`: returns the new direction, whether the
@@ -280,32 +392,19 @@ impl<'a> Setup<'a> {
         (s.dir, s.fallback, from_inside != s.transmitted)
     }
 
-    /// The walk along a fiber with cuticle scales: period by period (see [`super::Cuticle`]).
-    fn walk_cuticle(
+    /// Moves a ray along a fiber with cuticle scales (see [`super::Cuticle`]) period by period
+    /// to its next boundary event: a hit of the scaled section (edge id) or a step face at a
+    /// scale edge (no id). `None` when it leaves the bounding cylinder.
+    fn advance_cuticle(
         &self,
-        mut p: [f64; 3],
-        mut dir: [f64; 3],
+        ray: &mut Ray,
         (len, k, s_max, rb): (f64, f64, f64, f64),
-        u: &mut impl FnMut() -> f64,
-    ) -> (Outcome, u32) {
-        let mut skip: Option<u32> = None;
-        let mut inside = false;
-        let mut path = 0.0;
-        let mut events = 0u32;
-        let mut fallbacks = 0u32;
-        let mut period = (p[2] / len).floor() as i64;
+    ) -> Option<([f64; 3], Option<u32>, i64)> {
         let r_bound = rb * s_max;
-        let finish = |events: u32, inside: bool, dir, path| {
-            if events == 0 {
-                Outcome::Miss
-            } else if inside {
-                Outcome::Lost
-            } else {
-                Outcome::Exit { dir, path_um: path }
-            }
-        };
+        let dir = ray.dir;
         for _ in 0..10_000_000u32 {
-            let z_lo = period as f64 * len;
+            let p = ray.p;
+            let z_lo = ray.period as f64 * len;
             let t_plane = if dir[2] > 0.0 {
                 (z_lo + len - p[2]) / dir[2]
             } else if dir[2] < 0.0 {
@@ -313,84 +412,64 @@ impl<'a> Setup<'a> {
             } else {
                 f64::INFINITY
             };
-            let Some(t_circle) = circle_exit([p[0], p[1]], [dir[0], dir[1]], r_bound) else {
-                return (finish(events, inside, dir, path), fallbacks);
-            };
+            let t_circle = circle_exit([p[0], p[1]], [dir[0], dir[1]], r_bound)?;
             let t1 = t_plane.min(t_circle);
             let s0 = 1.0 + k * (p[2] - z_lo);
             let p1 = [p[0] + t1 * dir[0], p[1] + t1 * dir[1], p[2] + t1 * dir[2]];
             let s1 = 1.0 + k * (p1[2] - z_lo).clamp(0.0, len);
             let q0 = [p[0] / s0, p[1] / s0];
             let q1 = [p1[0] / s1, p1[1] / s1];
-            if let Some(hit) = self
-                .section
-                .intersect(q0, [q1[0] - q0[0], q1[1] - q0[1]], 1.0, skip)
+            if let Some(hit) =
+                self.section
+                    .intersect(q0, [q1[0] - q0[0], q1[1] - q0[1]], 1.0, ray.skip)
             {
                 // Back from the section's segment parameter to the ray's.
                 let uu = hit.t;
                 let tau = uu * s0 / ((1.0 - uu) * s1 + uu * s0);
                 let t = tau * t1;
-                p = [p[0] + t * dir[0], p[1] + t * dir[1], p[2] + t * dir[2]];
-                if inside {
-                    path += t;
+                ray.p = [p[0] + t * dir[0], p[1] + t * dir[1], p[2] + t * dir[2]];
+                if ray.inside {
+                    ray.path += t;
                 }
                 // Surface n·(x, y) = c·s(z): gradient (n, −c·ds/dz).
                 let nz = -hit.c * k;
                 let inv = 1.0 / (1.0 + nz * nz).sqrt();
-                let n_out = [hit.n[0] * inv, hit.n[1] * inv, nz * inv];
-                let s = self.boundary(dir, n_out, u);
-                fallbacks += s.1 as u32;
-                dir = s.0;
-                inside = s.2;
-                skip = Some(hit.id);
-                events += 1;
-                if events >= MAX_EVENTS {
-                    return (Outcome::Lost, fallbacks);
-                }
-                continue;
+                return Some(([hit.n[0] * inv, hit.n[1] * inv, nz * inv], Some(hit.id), 0));
             }
             if t_circle <= t_plane {
                 // Left the bounding cylinder without meeting the fiber.
-                return (finish(events, inside, dir, path), fallbacks);
+                return None;
             }
             // Cross the scale edge plane.
-            p = p1;
-            if inside {
-                path += t1;
+            ray.p = p1;
+            if ray.inside {
+                ray.path += t1;
             }
             let up = dir[2] > 0.0;
-            p[2] = if up { z_lo + len } else { z_lo };
+            ray.p[2] = if up { z_lo + len } else { z_lo };
             let s_after = if up { 1.0 } else { s_max };
-            let inside_after = self.section.contains([p[0] / s_after, p[1] / s_after]);
-            skip = None;
-            if inside_after == inside {
-                period += if up { 1 } else { -1 };
+            let inside_after = self
+                .section
+                .contains([ray.p[0] / s_after, ray.p[1] / s_after]);
+            ray.skip = None;
+            let step = if up { 1 } else { -1 };
+            if inside_after == ray.inside {
+                ray.period += step;
                 continue;
             }
-            // The step face of a scale edge, normal ±z, material on the photon's side if inside.
+            // The step face of a scale edge, normal ±z, material on the photon's side if
+            // inside. The period advances by `step` if the photon crosses it ([`Self::walk`]).
             let sign = if up { 1.0 } else { -1.0 };
-            let n_out = if inside {
+            let n_out = if ray.inside {
                 [0.0, 0.0, sign]
             } else {
                 [0.0, 0.0, -sign]
             };
-            let s = self.boundary(dir, n_out, u);
-            fallbacks += s.1 as u32;
-            let was_inside = inside;
-            dir = s.0;
-            inside = s.2;
-            if inside != was_inside {
-                period += if up { 1 } else { -1 };
-            }
-            events += 1;
-            if events >= MAX_EVENTS {
-                return (Outcome::Lost, fallbacks);
-            }
+            return Some((n_out, None, step));
         }
-        (Outcome::Lost, fallbacks)
+        None
     }
 }
-
 /// Traces `o.photons` photons of the beam from `inc` through `fiber`. Batches run in parallel
 /// on the current rayon pool; batch b draws from `batch_rng(seed, b)` and partial tallies are
 /// added in batch order, so the result is bit-identical for any thread count.
@@ -422,7 +501,7 @@ pub fn trace(fiber: &Fiber, inc: Incident, o: &TraceOptions) -> TraceResult {
         tally: total,
         incident: inc,
         projected_width_um: fiber.projected_width_um(inc.phi_rad),
-        beam_width_um: setup.beam.1 - setup.beam.0,
+        beam_width_um: setup.beam_width_um(),
         seconds: start.elapsed().as_secs_f64(),
     }
 }
@@ -431,19 +510,17 @@ fn trace_batch(setup: &Setup, inc: Incident, o: &TraceOptions, batch: u64, n: u6
     let mut rng = batch_rng(o.seed, batch);
     let mut t = Tally::new(o.grid, &o.mua_per_um);
     t.launched = n;
+    let grid = o.grid;
     for _ in 0..n {
-        let (out, fb, g) = setup.photon(&mut rng);
-        t.fallbacks += fb as u64;
-        match out {
-            Outcome::Miss => {}
-            Outcome::Lost => {
-                t.intercepted += 1;
-                t.lost += 1;
-            }
-            Outcome::Exit { dir, path_um } => {
-                t.intercepted += 1;
-                t.score(o.grid.bin(dir, inc.phi_rad), path_um, g);
-            }
+        let st = setup.photon(&mut rng, None, 1, &mut |dir, path, w| {
+            t.score(grid.bin(dir, inc.phi_rad), path, w)
+        });
+        t.fallbacks += st.fallbacks as u64;
+        if st.hit {
+            t.intercepted += 1;
+        }
+        if st.lost > 0.0 {
+            t.lost += 1;
         }
     }
     t

@@ -73,3 +73,42 @@ pub fn write(
         .map_err(|e| anyhow::anyhow!("encoding {}: {e}", path.display()))?;
     atomic::write(path, buf.get_ref()).with_context(|| format!("writing {}", path.display()))
 }
+
+/// Writes a linear RGB float image (`w × h`, rows top to bottom) with a comment, ZIP
+/// compressed, atomically.
+pub fn write_rgb(
+    path: &Path,
+    w: usize,
+    h: usize,
+    rgb: [Vec<f32>; 3],
+    comment: &str,
+) -> anyhow::Result<()> {
+    let [r, g, b] = rgb;
+    let channels = AnyChannels::sort(smallvec::smallvec![
+        AnyChannel::new("R", FlatSamples::F32(r)),
+        AnyChannel::new("G", FlatSamples::F32(g)),
+        AnyChannel::new("B", FlatSamples::F32(b)),
+    ]);
+    let attrs = LayerAttributes {
+        comments: Some(Text::from(comment)),
+        ..LayerAttributes::default()
+    };
+    let layer = Layer::new(
+        (w, h),
+        attrs,
+        Encoding {
+            compression: Compression::ZIP16,
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        },
+        channels,
+    );
+    let image = Image::from_layer(layer);
+    let mut buf = std::io::Cursor::new(Vec::new());
+    image
+        .write()
+        .non_parallel()
+        .to_buffered(&mut buf)
+        .map_err(|e| anyhow::anyhow!("encoding {}: {e}", path.display()))?;
+    atomic::write(path, buf.get_ref()).with_context(|| format!("writing {}", path.display()))
+}

@@ -20,7 +20,7 @@ extern "C" {
     fn H5DSattach_scale(did: hid_t, dsid: hid_t, idx: std::ffi::c_uint) -> i32;
 }
 
-fn text_attr(loc: &h5::Location, name: &str, value: &str) -> anyhow::Result<()> {
+pub(crate) fn text_attr(loc: &h5::Location, name: &str, value: &str) -> anyhow::Result<()> {
     let v = VarLenUnicode::from_str(value).map_err(|e| anyhow::anyhow!("attribute {name}: {e}"))?;
     loc.new_attr::<VarLenUnicode>()
         .create(name)?
@@ -72,6 +72,23 @@ fn write_dataset(g: &h5::Group, d: &Dataset) -> anyhow::Result<h5::Dataset> {
     text_attr(&ds, "units", d.units)?;
     text_attr(&ds, "description", d.description)?;
     Ok(ds)
+}
+
+/// Makes `scale` an HDF5 dimension scale named `name` and attaches it to dimension `dim`
+/// of each dataset in `targets`.
+pub(crate) fn attach_scale(
+    scale: &h5::Dataset,
+    name: &str,
+    targets: &[(&h5::Dataset, u32)],
+) -> anyhow::Result<()> {
+    let label = CString::new(name)?;
+    let rc = h5::sync::sync(|| unsafe { H5DSset_scale(scale.id(), label.as_ptr()) });
+    anyhow::ensure!(rc >= 0, "H5DSset_scale({name}) failed");
+    for (ds, dim) in targets {
+        let rc = h5::sync::sync(|| unsafe { H5DSattach_scale(ds.id(), scale.id(), *dim) });
+        anyhow::ensure!(rc >= 0, "H5DSattach_scale({name}) failed");
+    }
+    Ok(())
 }
 
 /// Writes `t` to `path` atomically.

@@ -77,3 +77,42 @@ pub fn write_slice_png(
     }
     super::plot::write_png(path, w, h, buf)
 }
+
+/// Writes a grid of slices (Table 8's layout): `panels[r * cols + c]` holds densities per
+/// bin (θ row-major, `n_theta × n_phi`), each shown on its own log scale ([`DECADES`] below
+/// its maximum), `px` pixels per bin, panels separated by 2 black pixels.
+pub fn write_panels_png(
+    path: &Path,
+    n_theta: usize,
+    n_phi: usize,
+    panels: &[Vec<f64>],
+    cols: usize,
+    px: u32,
+) -> anyhow::Result<()> {
+    anyhow::ensure!(!panels.is_empty() && cols > 0, "no panels");
+    let rows = panels.len().div_ceil(cols);
+    let gap = 2u32;
+    let (pw, ph) = (n_phi as u32 * px, n_theta as u32 * px);
+    let w = cols as u32 * (pw + gap) - gap;
+    let h = rows as u32 * (ph + gap) - gap;
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    for (k, p) in panels.iter().enumerate() {
+        let (r, c) = ((k / cols) as u32, (k % cols) as u32);
+        let vmax = p.iter().copied().fold(0.0, f64::max);
+        for y in 0..ph {
+            let it = n_theta - 1 - (y / px) as usize;
+            for x in 0..pw {
+                let v = p[it * n_phi + (x / px) as usize];
+                let col = if v > 0.0 && vmax > 0.0 {
+                    colour(1.0 + (v / vmax).log10() / DECADES)
+                } else {
+                    [0, 0, 0]
+                };
+                let (gx, gy) = (c * (pw + gap) + x, r * (ph + gap) + y);
+                let o = ((gy * w + gx) * 3) as usize;
+                buf[o..o + 3].copy_from_slice(&col);
+            }
+        }
+    }
+    super::plot::write_png(path, w, h, buf)
+}

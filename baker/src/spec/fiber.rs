@@ -9,13 +9,14 @@ use serde::Deserialize;
 use super::error::{SpecError, SpecErrors};
 use super::raw::Spanned;
 use super::resolve::{loc, parse_yaml, Ctx};
+use crate::fiber::bake::BakeSettings;
 use crate::fiber::dye::{self, Band, Dye, DyeClass, Spectrum};
-use crate::fiber::material::{
-    fiber_type, FiberType, TABLE_9, WOOL_SCALE_LENGTH_UM, WOOL_SCALE_TILT_DEG,
-};
+use crate::fiber::material::{FiberType, TABLE_9, WOOL_SCALE_LENGTH_UM, WOOL_SCALE_TILT_DEG};
 use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
+use crate::fiber::sweep::ChannelKind;
 use crate::fiber::{Cuticle, Fiber, Section, Surface};
+use formats::Precision;
 
 #[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -25,6 +26,38 @@ pub struct RawFiberSpec {
     pub dyes: Vec<Spanned<RawDye>>,
     #[serde(default)]
     pub fibers: Vec<Spanned<RawFiber>>,
+    pub bake: Option<Spanned<RawBake>>,
+}
+
+/// `bake:` — how `baker bake` tabulates the BCSDFs (all optional).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawBake {
+    pub resolution_deg: Option<Spanned<f64>>,
+    pub photons_per_direction: Option<Spanned<f64>>,
+    pub seed: Option<Spanned<f64>>,
+    pub split: Option<Spanned<f64>>,
+    pub precision: Option<Spanned<String>>,
+    pub keep_bits: Option<Spanned<f64>>,
+    pub channels: Option<Spanned<String>>,
+    pub lambda_nm: Option<Spanned<RawLambda>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLambda {
+    pub start: Spanned<f64>,
+    pub end: Spanned<f64>,
+    pub step: Spanned<f64>,
+}
+
+/// `sweep:` — every dye × every depth of shade, from the same trace.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSweep {
+    pub dyes: Spanned<Vec<Spanned<String>>>,
+    pub depth_of_shade_percent: Spanned<Vec<Spanned<f64>>>,
+    pub undyed: Option<Spanned<bool>>,
 }
 
 /// `{name, class, bands: [{peak_nm, fwhm_nm, peak_eps_l_per_mg_cm}]}` or `{name, class, csv}`.
@@ -62,6 +95,9 @@ pub struct RawFiber {
     pub dye: Option<Spanned<String>>,
     pub depth_of_shade_percent: Option<Spanned<f64>>,
     pub cuticle: Option<Spanned<RawCuticle>>,
+    pub sections: Option<Spanned<f64>>,
+    pub sweep: Option<Spanned<RawSweep>>,
+    pub symmetry: Option<Spanned<String>>,
 }
 
 /// Exactly one of `shape` (a generator, or `ellipse` with `ratio`), `polygon` (CSV) or `mask`
@@ -99,6 +135,7 @@ pub struct FiberSpec {
     /// Presets plus the spec's own dyes.
     pub dyes: Vec<Dye>,
     pub fibers: Vec<FiberEntry>,
+    pub bake: BakeSettings,
 }
 
 /// Where a section came from.
@@ -136,12 +173,41 @@ pub struct FiberEntry {
     pub cuticle: Option<Cuticle>,
     /// The dye and its depth of shade ζ (fraction).
     pub dye: Option<(Dye, f64)>,
+    /// Seeded cross-sections baked for this entry (variants `variant`, `variant + 1`, …).
+    pub sections: u64,
+    /// The dyeings baked from one trace: `None` is the undyed fiber.
+    pub variants: Vec<Option<(Dye, f64)>>,
+    /// `auto`: detect the symmetries; `none`: trace every incoming direction.
+    pub symmetry: SymmetryMode,
 }
 
 impl FiberEntry {
     pub fn fiber(&self) -> Fiber {
+        self.fiber_with(self.section.clone())
+    }
+
+    /// Cross-section `s` of the entry's population (0 is [`FiberEntry::section`]): the
+    /// generator's next variants, scaled to the same mean width.
+    pub fn section_variant(&self, s: u64) -> Result<Section, String> {
+        if s == 0 {
+            return Ok(self.section.clone());
+        }
+        match &self.source {
+            SectionSource::Generator {
+                shape,
+                seed,
+                variant,
+            } => generate(*shape, 1.0, *seed, variant + s)
+                .and_then(|x| x.scaled_to_diameter(self.diameter_um))
+                .map_err(|e| e.to_string()),
+            _ => Err("only generated sections have variants".into()),
+        }
+    }
+
+    /// The fiber with another cross-section of the population.
+    pub fn fiber_with(&self, section: Section) -> Fiber {
         Fiber {
-            section: self.section.clone(),
+            section,
             surface: Surface {
                 eta: self.eta,
                 alpha: self.beta_deg.to_radians().tan(),
@@ -152,10 +218,30 @@ impl FiberEntry {
 
     /// μa(λ) of the dyed fiber, per µm (0 undyed).
     pub fn mua_per_um(&self, lambda_nm: f64) -> f64 {
-        self.dye.as_ref().map_or(0.0, |(d, dos)| {
+        self.variant_mua_per_um(self.dye.as_ref(), lambda_nm)
+    }
+
+    /// μa(λ) of the fiber dyed with `dye` at its depth of shade, per µm (Eq. of §5.3.1:
+    /// μa = ρ·ζ·ε).
+    pub fn variant_mua_per_um(&self, dye: Option<&(Dye, f64)>, lambda_nm: f64) -> f64 {
+        dye.map_or(0.0, |(d, dos)| {
             d.mua_per_mm(lambda_nm, self.fiber_type.density_g_per_cm3, *dos) * 1e-3
         })
     }
+
+    /// Name of a dyeing: `undyed` or `<dye>@<DoS>%`.
+    pub fn variant_name(v: Option<&(Dye, f64)>) -> String {
+        v.map_or("undyed".into(), |(d, z)| {
+            format!("{}@{}%", d.name, z * 100.0)
+        })
+    }
+}
+
+/// How the bake finds the fiber's symmetries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SymmetryMode {
+    Auto,
+    None,
 }
 
 /// True when the YAML text is a fiber spec (it has a top-level `fibers:` key).
@@ -228,10 +314,115 @@ impl Ctx {
         if raw.fibers.is_empty() {
             self.invalid((1, 1), "fibers", "the spec lists no fibers");
         }
+        let bake = raw
+            .bake
+            .as_ref()
+            .map_or_else(BakeSettings::default, |b| self.bake(&b.value));
         FiberSpec {
             file: self.file.clone(),
             dyes,
             fibers,
+            bake,
+        }
+    }
+
+    fn bake(&mut self, b: &RawBake) -> BakeSettings {
+        let d = BakeSettings::default();
+        let res_deg = match &b.resolution_deg {
+            Some(r) => match self.in_range("bake.resolution_deg", r, 0.25, 30.0, false) {
+                Some(x) if crate::fiber::AngularGrid::new(x).is_ok() => x,
+                Some(x) => {
+                    self.out_of_range(
+                        loc(r),
+                        "bake.resolution_deg",
+                        x.to_string(),
+                        "a divisor of 180 in [0.25, 30], e.g. 1, 2, 3, 5, 6, 10".into(),
+                    );
+                    d.res_deg
+                }
+                None => d.res_deg,
+            },
+            None => d.res_deg,
+        };
+        let photons = self.count(
+            "bake.photons_per_direction",
+            &b.photons_per_direction,
+            1e12,
+            d.photons,
+        );
+        if photons == 0 {
+            if let Some(p) = &b.photons_per_direction {
+                self.out_of_range(
+                    loc(p),
+                    "bake.photons_per_direction",
+                    "0".into(),
+                    "[1, 1e12]".into(),
+                );
+            }
+        }
+        let seed = self.count("bake.seed", &b.seed, 2f64.powi(53), d.seed);
+        let split = self
+            .count("bake.split", &b.split, 64.0, d.split as u64)
+            .max(1) as u32;
+        let precision = match &b.precision {
+            Some(p) => self
+                .choice(
+                    "bake.precision",
+                    p,
+                    &[("f16", Precision::F16), ("f32", Precision::F32)],
+                )
+                .unwrap_or(d.precision),
+            None => d.precision,
+        };
+        let keep_bits = self.count(
+            "bake.keep_bits",
+            &b.keep_bits,
+            precision.mantissa_bits() as f64,
+            precision.mantissa_bits() as u64,
+        ) as u32;
+        let channels = match &b.channels {
+            Some(c) => self
+                .choice(
+                    "bake.channels",
+                    c,
+                    &[
+                        ("rgb", ChannelKind::Rgb),
+                        ("spectral", ChannelKind::Spectral),
+                    ],
+                )
+                .unwrap_or(d.channels),
+            None => d.channels,
+        };
+        let lambda_nm = match &b.lambda_nm {
+            Some(l) => {
+                let r = &l.value;
+                let a = self.in_range("bake.lambda_nm.start", &r.start, 360.0, 830.0, false);
+                let e = self.in_range("bake.lambda_nm.end", &r.end, 360.0, 830.0, false);
+                let st = self.in_range("bake.lambda_nm.step", &r.step, 0.0, 100.0, true);
+                match (a, e, st) {
+                    (Some(a), Some(e), Some(st)) if e >= a => {
+                        let n = ((e - a) / st + 1e-9).floor() as usize + 1;
+                        (0..n).map(|i| a + st * i as f64).collect()
+                    }
+                    (Some(_), Some(_), Some(_)) => {
+                        self.invalid(loc(l), "bake.lambda_nm", "`end` must not be below `start`");
+                        d.lambda_nm.clone()
+                    }
+                    _ => d.lambda_nm.clone(),
+                }
+            }
+            None => d.lambda_nm.clone(),
+        };
+        BakeSettings {
+            res_deg,
+            photons: photons.max(1),
+            seed,
+            split,
+            precision,
+            keep_bits,
+            channels,
+            lambda_nm,
+            ..d
         }
     }
 
@@ -435,7 +626,74 @@ impl Ctx {
             }
             (None, None) => None,
         };
+        let sections = self.count("fibers.sections", &r.sections, 64.0, 1).max(1);
+        if sections > 1 && !matches!(source, SectionSource::Generator { .. }) {
+            self.invalid(
+                loc(r.sections.as_ref().unwrap()),
+                "fibers.sections",
+                "several sections need a generated `shape` (a polygon or mask is one section)",
+            );
+            return None;
+        }
+        let mut variants = Vec::new();
+        if let Some(sw) = &r.sweep {
+            let sw = &sw.value;
+            if sw.undyed.as_ref().is_some_and(|u| u.value) {
+                variants.push(None);
+            }
+            for name in &sw.dyes.value {
+                let Some(d) = dyes.iter().find(|d| d.name == name.value) else {
+                    let names: Vec<&str> = dyes.iter().map(|d| d.name.as_str()).collect();
+                    self.out_of_range(
+                        loc(name),
+                        "fibers.sweep.dyes",
+                        format!("{:?}", name.value),
+                        format!("one of {}", names.join(", ")),
+                    );
+                    return None;
+                };
+                for dos in &sw.depth_of_shade_percent.value {
+                    let z = self.in_range(
+                        "fibers.sweep.depth_of_shade_percent",
+                        dos,
+                        100.0 * dye::DOS_RANGE.0,
+                        100.0 * dye::DOS_RANGE.1,
+                        false,
+                    )?;
+                    variants.push(Some((d.clone(), z / 100.0)));
+                }
+            }
+            if variants.is_empty() {
+                self.invalid(
+                    loc(&r.name),
+                    "fibers.sweep",
+                    "the sweep lists no dye or depth of shade",
+                );
+                return None;
+            }
+            if dye.is_some() {
+                self.invalid(
+                    loc(&r.name),
+                    "fibers.sweep",
+                    "give `dye` or `sweep`, not both",
+                );
+                return None;
+            }
+        } else {
+            variants.push(dye.clone());
+        }
+        let symmetry = match &r.symmetry {
+            Some(sy) => self.choice(
+                "fibers.symmetry",
+                sy,
+                &[("auto", SymmetryMode::Auto), ("none", SymmetryMode::None)],
+            )?,
+            None => SymmetryMode::Auto,
+        };
         Some(FiberEntry {
+            sections,
+            variants,
+            symmetry,
             name: r.name.value.clone(),
             line: loc(f).0,
             fiber_type: ft,
@@ -502,6 +760,7 @@ impl Ctx {
                 );
                 return None;
             }
+            // `ellipse` was handled above; it is listed so the error names every shape.
             let mut opts: Vec<(&str, Shape)> = Shape::ALL.to_vec();
             opts.push(("ellipse", Shape::Circle));
             let sh = self.choice("fibers.section.shape", shape, &opts)?;
@@ -564,9 +823,4 @@ impl Ctx {
             }
         }
     }
-}
-
-/// Looks up the fiber type by name for the command line (`--type`).
-pub fn type_by_name(name: &str) -> Option<&'static FiberType> {
-    fiber_type(name)
 }

@@ -1,0 +1,849 @@
+//! Tabulated fiber BCSDFs (`.bcsdf`): the 4D scattering function f(ωi, ωo) of one fiber
+//! cross-section (thesis §5.3.2, §5.5), one zstd frame per stored incoming direction so a
+//! renderer can stream, plus the directional albedo Λ(ωi) and the projected width A(φ).
+//!
+//! # Conventions
+//! Fiber frame: axis +z. A direction ω (unit vector, pointing away from the fiber for ωo and
+//! towards the light for ωi) has θ = asin(ω·z) ∈ [−90°, 90°] and φ = atan2(ω·y, ω·x).
+//! Outgoing azimuths are relative: Δφ = φo − φi wrapped to [−180°, 180°). The grid has
+//! `n_theta = 180/res` θ bins from −90° and `n_phi = 360/res` φ (or Δφ) bins from −180°.
+//!
+//! # What is stored
+//! Per stored ωi, per variant (dye × depth of shade) and channel (R, G, B or one wavelength):
+//! the BCSDF normalised to one, `f̂(ωi, ωo)` in sr⁻¹ (Σ f̂·ΔΩ = 1 over the θo × Δφ bins), and
+//! the albedo Λ(ωi), so f = Λ·f̂ (§5.5: "the BCSDFs are normalized to one, with a separated
+//! table coding the directionally-varying albedo"). Every (θi, φi) bin of the full grid maps
+//! to a stored ωi through `wi_map`, with flags saying whether θo or Δφ change sign there:
+//! that is how the symmetries of the fiber (mirror along the axis, rotations and mirrors of
+//! the cross-section) shrink the table.
+//!
+//! The sampling density is p(ωo) = mean over channels of f̂ (renormalised after quantisation),
+//! piecewise constant in solid angle over the bins. Its 2D CDFs (marginal over θo, conditional
+//! over Δφ) are derived when a slice is decoded, so they always match the stored values.
+//!
+//! # Byte layout (version 1; formats/FORMAT.md has the full description)
+//! ```text
+//! offset  size  field
+//!      0     8  magic b"BAKERFIB"
+//!      8     4  format version, u32 LE = 1
+//!     12     4  flags, u32 LE = 0
+//!     16     8  directory_compressed_len, u64 LE
+//!     24     8  directory_raw_len, u64 LE
+//!     32     8  payload_len, u64 LE
+//!     40     4  directory_crc32, u32 LE (of the decompressed directory)
+//!     44     4  reserved, u32 LE = 0
+//!     48     …  directory: one zstd frame holding UTF-8 JSON ([`Directory`])
+//!      …     …  payload: one zstd frame per stored ωi, at `chunks[i].offset` from its start
+//! ```
+//! A chunk decompresses to `n_variants × n_channels × n_theta × n_phi` values (row-major,
+//! θo rows, Δφ columns) of `dtype` (`f16` or `f32`, little-endian), **byte-shuffled**: the
+//! first byte of every value, then the second byte of every value, and so on (as HDF5's
+//! shuffle filter). A value times `scale[i][variant][channel]` is f̂.
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::path::Path;
+use std::sync::OnceLock;
+
+use serde::{Deserialize, Serialize};
+
+use crate::table::{crc32, TableError};
+
+/// The first 8 bytes of every file.
+pub const MAGIC: [u8; 8] = *b"BAKERFIB";
+/// Current version of the layout.
+pub const VERSION: u32 = 1;
+/// Size of the fixed header in bytes.
+pub const HEADER_LEN: usize = 48;
+/// Usual file extension (without the dot).
+pub const EXTENSION: &str = "bcsdf";
+/// `kind` of the directory.
+pub const KIND: &str = "baker-fiber-bcsdf";
+/// `wi_map` flag: θo changes sign (mirror z → −z along the fiber).
+pub const FLIP_THETA: u32 = 1 << 31;
+/// `wi_map` flag: Δφ changes sign (mirror of the cross-section).
+pub const FLIP_DPHI: u32 = 1 << 30;
+/// `wi_map` mask of the stored index.
+pub const INDEX_MASK: u32 = (1 << 30) - 1;
+
+/// Element type of the stored values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// IEEE-754 binary16.
+    F16,
+    /// IEEE-754 binary32.
+    F32,
+}
+
+impl Precision {
+    /// Bytes per value.
+    pub fn size(self) -> usize {
+        match self {
+            Precision::F16 => 2,
+            Precision::F32 => 4,
+        }
+    }
+
+    /// Explicit mantissa bits of the type (10 or 23).
+    pub fn mantissa_bits(self) -> u32 {
+        match self {
+            Precision::F16 => 10,
+            Precision::F32 => 23,
+        }
+    }
+}
+
+/// Location of one chunk in the payload.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Chunk {
+    pub offset: u64,
+    pub compressed_bytes: u64,
+    pub raw_bytes: u64,
+    /// CRC-32 of the decompressed (shuffled) bytes.
+    pub crc32: u32,
+}
+
+/// The JSON directory of a `.bcsdf` file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Directory {
+    /// Always [`KIND`].
+    pub kind: String,
+    /// Bin width in degrees; `n_theta = 180/res_deg`, `n_phi = 360/res_deg`.
+    pub res_deg: f64,
+    pub n_theta: usize,
+    pub n_phi: usize,
+    /// Stored incoming directions, bin centres `[θi, φi]` in degrees.
+    pub wi_deg: Vec<[f64; 2]>,
+    /// Full grid (θi row-major, `n_theta × n_phi`): stored index | [`FLIP_THETA`] | [`FLIP_DPHI`].
+    pub wi_map: Vec<u32>,
+    /// Variant names (dye and depth of shade, or `undyed`).
+    pub variants: Vec<String>,
+    /// Channel names: `R`, `G`, `B` (linear sRGB, D65) or wavelengths such as `550nm`.
+    pub channels: Vec<String>,
+    pub dtype: Precision,
+    /// Mantissa bits kept after rounding (≤ the type's): lossy "bit rounding" that zeroes
+    /// bits below the Monte Carlo noise so zstd can compress.
+    pub keep_bits: u32,
+    /// Per stored ωi, variant, channel: value = stored × scale.
+    pub scale: Vec<f32>,
+    /// Per stored ωi, variant, channel: directional albedo Λ(ωi).
+    pub albedo: Vec<f32>,
+    /// Standard error of `albedo`.
+    pub albedo_se: Vec<f32>,
+    /// Projected width of the fiber per unit length, µm, at the φ bin centres (absolute φ;
+    /// A(ω) of Eq. 17 before its sin(ω, ωf) factor).
+    pub area_um: Vec<f64>,
+    /// One per stored ωi.
+    pub chunks: Vec<Chunk>,
+    /// Free-form provenance: fiber, section, photons, seed, symmetry, timing, noise.
+    pub metadata: serde_json::Value,
+}
+
+impl Directory {
+    /// Number of stored incoming directions.
+    pub fn n_wi(&self) -> usize {
+        self.wi_deg.len()
+    }
+
+    /// Values per variant and channel in one slice.
+    pub fn bins(&self) -> usize {
+        self.n_theta * self.n_phi
+    }
+
+    fn check(&self) -> Result<(), TableError> {
+        let bad = |m: String| Err(TableError::Format(m));
+        if self.kind != KIND {
+            return bad(format!("kind {:?}, expected {KIND:?}", self.kind));
+        }
+        let n = 180.0 / self.res_deg;
+        if !(n.is_finite() && n >= 1.0 && (n - n.round()).abs() < 1e-9) {
+            return bad(format!("res_deg {} does not divide 180°", self.res_deg));
+        }
+        if self.n_theta != n.round() as usize || self.n_phi != 2 * self.n_theta {
+            return bad("n_theta/n_phi disagree with res_deg".into());
+        }
+        let (w, v, c) = (self.n_wi(), self.variants.len(), self.channels.len());
+        if w == 0 || v == 0 || c == 0 {
+            return bad("no stored direction, variant or channel".into());
+        }
+        if self.wi_map.len() != self.bins() {
+            return bad(format!(
+                "wi_map has {} entries, expected {}",
+                self.wi_map.len(),
+                self.bins()
+            ));
+        }
+        if self.wi_map.iter().any(|&m| (m & INDEX_MASK) as usize >= w) {
+            return bad("wi_map points past the stored directions".into());
+        }
+        for (name, len) in [
+            ("scale", self.scale.len()),
+            ("albedo", self.albedo.len()),
+            ("albedo_se", self.albedo_se.len()),
+        ] {
+            if len != w * v * c {
+                return bad(format!("{name} has {len} values, expected {}", w * v * c));
+            }
+        }
+        if self.area_um.len() != self.n_phi || self.chunks.len() != w {
+            return bad("area_um or chunks have the wrong length".into());
+        }
+        if self.keep_bits > self.dtype.mantissa_bits() {
+            return bad(format!(
+                "keep_bits {} exceeds the type's mantissa",
+                self.keep_bits
+            ));
+        }
+        let raw = (v * c * self.bins() * self.dtype.size()) as u64;
+        if self.chunks.iter().any(|k| k.raw_bytes != raw) {
+            return bad("a chunk's raw size disagrees with the grid".into());
+        }
+        Ok(())
+    }
+}
+
+/// Rounds the mantissa of a non-negative f32 to `keep` bits (round half to even), the
+/// "bitround" of Klöwer et al., Nature Computational Science 1, 713 (2021).
+pub fn round_f32(x: f32, keep: u32) -> f32 {
+    if keep >= 23 || !x.is_finite() {
+        return x;
+    }
+    let drop = 23 - keep;
+    let b = x.to_bits();
+    let half = 1u32 << (drop - 1);
+    let r = b + (half - 1) + ((b >> drop) & 1);
+    f32::from_bits((r >> drop) << drop)
+}
+
+/// f16 counterpart of [`round_f32`] on the raw bits.
+fn round_f16_bits(h: u16, keep: u32) -> u16 {
+    if keep >= 10 {
+        return h;
+    }
+    let drop = 10 - keep;
+    let half = 1u16 << (drop - 1);
+    let r = h.saturating_add((half - 1) + ((h >> drop) & 1));
+    (r >> drop) << drop
+}
+
+/// Encodes one slice (`v × c × bins` values of f̂ ≥ 0) for `dir`'s type and bit count: returns
+/// the per (variant, channel) scales, the shuffled raw bytes, and the values a reader will
+/// decode (so writers of other formats can store exactly the same numbers).
+pub fn encode_slice(
+    values: &[f64],
+    n_vc: usize,
+    dtype: Precision,
+    keep_bits: u32,
+) -> (Vec<f32>, Vec<u8>, Vec<f32>) {
+    let bins = values.len() / n_vc.max(1);
+    let size = dtype.size();
+    let n = values.len();
+    let mut raw = vec![0u8; n * size];
+    let mut decoded = vec![0f32; n];
+    let mut scales = Vec::with_capacity(n_vc);
+    for k in 0..n_vc {
+        let part = &values[k * bins..(k + 1) * bins];
+        let max = part.iter().copied().fold(0.0, f64::max);
+        let scale = if max > 0.0 { max as f32 } else { 1.0 };
+        scales.push(scale);
+        for (j, &x) in part.iter().enumerate() {
+            let i = k * bins + j;
+            let y = (x / scale as f64) as f32;
+            match dtype {
+                Precision::F16 => {
+                    let h = round_f16_bits(half::f16::from_f32(y).to_bits(), keep_bits);
+                    let b = h.to_le_bytes();
+                    raw[i] = b[0];
+                    raw[n + i] = b[1];
+                    decoded[i] = half::f16::from_bits(h).to_f32() * scale;
+                }
+                Precision::F32 => {
+                    let r = round_f32(y, keep_bits);
+                    for (s, byte) in r.to_le_bytes().into_iter().enumerate() {
+                        raw[s * n + i] = byte;
+                    }
+                    decoded[i] = r * scale;
+                }
+            }
+        }
+    }
+    (scales, raw, decoded)
+}
+
+fn decode_values(raw: &[u8], dtype: Precision, scales: &[f32], bins: usize) -> Vec<f32> {
+    let size = dtype.size();
+    let n = raw.len() / size;
+    (0..n)
+        .map(|i| {
+            let s = scales[i / bins];
+            match dtype {
+                Precision::F16 => {
+                    half::f16::from_bits(u16::from_le_bytes([raw[i], raw[n + i]])).to_f32() * s
+                }
+                Precision::F32 => {
+                    f32::from_le_bytes([raw[i], raw[n + i], raw[2 * n + i], raw[3 * n + i]]) * s
+                }
+            }
+        })
+        .collect()
+}
+
+/// Builds a file from its directory (without `chunks`) and the raw shuffled slices.
+pub struct Writer {
+    pub dir: Directory,
+    payload: Vec<u8>,
+    level: i32,
+}
+
+impl Writer {
+    /// `dir.chunks`, `dir.scale` may be empty: [`Writer::push`] fills them in order.
+    pub fn new(mut dir: Directory, zstd_level: i32) -> Self {
+        dir.chunks.clear();
+        dir.scale.clear();
+        Self {
+            dir,
+            payload: Vec::new(),
+            level: zstd_level,
+        }
+    }
+
+    /// Appends the next stored ωi's slice: `values` are f̂ for every variant and channel.
+    /// Returns the decoded values (what a reader will see).
+    pub fn push(&mut self, values: &[f64]) -> Result<Vec<f32>, TableError> {
+        let n_vc = self.dir.variants.len() * self.dir.channels.len();
+        if values.len() != n_vc * self.dir.bins() {
+            return Err(TableError::Invalid(format!(
+                "slice has {} values, expected {}",
+                values.len(),
+                n_vc * self.dir.bins()
+            )));
+        }
+        let (scales, raw, decoded) = encode_slice(values, n_vc, self.dir.dtype, self.dir.keep_bits);
+        let frame = zstd::bulk::compress(&raw, self.level)
+            .map_err(|e| TableError::Compression(e.to_string()))?;
+        self.dir.chunks.push(Chunk {
+            offset: self.payload.len() as u64,
+            compressed_bytes: frame.len() as u64,
+            raw_bytes: raw.len() as u64,
+            crc32: crc32(&raw),
+        });
+        self.dir.scale.extend(scales);
+        self.payload.extend_from_slice(&frame);
+        Ok(decoded)
+    }
+
+    /// The whole file.
+    pub fn finish(self) -> Result<Vec<u8>, TableError> {
+        self.dir.check()?;
+        let json = serde_json::to_vec(&self.dir).map_err(|e| TableError::Invalid(e.to_string()))?;
+        let d = zstd::bulk::compress(&json, self.level)
+            .map_err(|e| TableError::Compression(e.to_string()))?;
+        let mut out = Vec::with_capacity(HEADER_LEN + d.len() + self.payload.len());
+        out.extend_from_slice(&MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&(d.len() as u64).to_le_bytes());
+        out.extend_from_slice(&(json.len() as u64).to_le_bytes());
+        out.extend_from_slice(&(self.payload.len() as u64).to_le_bytes());
+        out.extend_from_slice(&crc32(&json).to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&d);
+        out.extend_from_slice(&self.payload);
+        Ok(out)
+    }
+}
+
+/// One decoded stored ωi: f̂ for every variant and channel, and per variant the sampling
+/// density's CDFs.
+#[derive(Debug, Clone)]
+pub struct Slice {
+    /// `[variant][channel][θo][Δφ]`, sr⁻¹.
+    pub values: Vec<f32>,
+    /// Per variant: CDF over θo rows (`n_theta` values, last = 1).
+    pub cdf_theta: Vec<Vec<f64>>,
+    /// Per variant: per θo row, CDF over Δφ (`n_theta × n_phi`, each row ending at 1, or all
+    /// zero for an empty row).
+    pub cdf_phi: Vec<Vec<f64>>,
+    /// Per variant: Σ over bins of p·ΔΩ before normalisation (1 up to quantisation; 0 when
+    /// the variant scatters nothing).
+    pub norm: Vec<f64>,
+}
+
+/// A direction drawn by [`Bcsdf::sample`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Unit vector in the fiber frame.
+    pub wo: [f64; 3],
+    /// Density of `wo` in sr⁻¹.
+    pub pdf: f64,
+}
+
+/// θ and φ (radians) of a direction in the fiber frame.
+pub fn angles(w: [f64; 3]) -> (f64, f64) {
+    let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    ((w[2] / n).clamp(-1.0, 1.0).asin(), w[1].atan2(w[0]))
+}
+
+/// Unit vector of θ, φ (radians).
+pub fn direction(theta: f64, phi: f64) -> [f64; 3] {
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = phi.sin_cos();
+    [ct * cp, ct * sp, st]
+}
+
+/// A `.bcsdf` file in memory, decoding slices on first use (thread-safe).
+pub struct Bcsdf {
+    pub dir: Directory,
+    payload: Vec<u8>,
+    slices: Vec<OnceLock<Result<Slice, String>>>,
+}
+
+impl std::fmt::Debug for Bcsdf {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Bcsdf")
+            .field("n_wi", &self.dir.n_wi())
+            .field("variants", &self.dir.variants)
+            .field("channels", &self.dir.channels)
+            .finish()
+    }
+}
+
+fn u32_at(b: &[u8], o: usize) -> u32 {
+    u32::from_le_bytes(b[o..o + 4].try_into().unwrap())
+}
+
+fn u64_at(b: &[u8], o: usize) -> u64 {
+    u64::from_le_bytes(b[o..o + 8].try_into().unwrap())
+}
+
+impl Bcsdf {
+    /// Reads and checks a file.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, TableError> {
+        let p = path.as_ref();
+        let bytes = std::fs::read(p).map_err(|source| TableError::Io {
+            path: p.to_path_buf(),
+            source,
+        })?;
+        Self::from_bytes(bytes)
+    }
+
+    /// Parses a whole file held in memory.
+    pub fn from_bytes(mut b: Vec<u8>) -> Result<Self, TableError> {
+        let fmt = |m: &str| TableError::Format(m.to_string());
+        if b.len() < HEADER_LEN || b[..8] != MAGIC {
+            return Err(fmt(
+                "not a .bcsdf file (bad magic or shorter than the header)",
+            ));
+        }
+        let version = u32_at(&b, 8);
+        if version != VERSION {
+            return Err(TableError::UnsupportedVersion(version));
+        }
+        let (dc, dr, pl) = (u64_at(&b, 16), u64_at(&b, 24), u64_at(&b, 32));
+        let crc = u32_at(&b, 40);
+        let end = (HEADER_LEN as u64)
+            .checked_add(dc)
+            .and_then(|x| x.checked_add(pl))
+            .ok_or_else(|| fmt("lengths overflow"))?;
+        if end != b.len() as u64 {
+            return Err(fmt("file size disagrees with the header (truncated?)"));
+        }
+        let dstart = HEADER_LEN + dc as usize;
+        let json = zstd::bulk::decompress(&b[HEADER_LEN..dstart], dr as usize)
+            .map_err(|e| TableError::Format(format!("directory: {e}")))?;
+        let computed = crc32(&json);
+        if computed != crc {
+            return Err(TableError::Checksum {
+                part: "directory".into(),
+                stored: crc,
+                computed,
+            });
+        }
+        let dir: Directory = serde_json::from_slice(&json)
+            .map_err(|e| TableError::Format(format!("directory: {e}")))?;
+        dir.check()?;
+        if dir
+            .chunks
+            .iter()
+            .any(|c| c.offset.saturating_add(c.compressed_bytes) > pl)
+        {
+            return Err(fmt("a chunk lies past the payload"));
+        }
+        let payload = b.split_off(dstart);
+        let slices = (0..dir.n_wi()).map(|_| OnceLock::new()).collect();
+        Ok(Self {
+            dir,
+            payload,
+            slices,
+        })
+    }
+
+    /// Decodes stored slice `i` (without caching).
+    pub fn decode(&self, i: usize) -> Result<Slice, TableError> {
+        let d = &self.dir;
+        let c = &d.chunks[i];
+        let frame = &self.payload[c.offset as usize..(c.offset + c.compressed_bytes) as usize];
+        let raw = zstd::bulk::decompress(frame, c.raw_bytes as usize)
+            .map_err(|e| TableError::Format(format!("chunk {i}: {e}")))?;
+        let computed = crc32(&raw);
+        if computed != c.crc32 || raw.len() as u64 != c.raw_bytes {
+            return Err(TableError::Checksum {
+                part: format!("chunk {i}"),
+                stored: c.crc32,
+                computed,
+            });
+        }
+        let (nv, nc) = (d.variants.len(), d.channels.len());
+        let bins = d.bins();
+        let values = decode_values(
+            &raw,
+            d.dtype,
+            &d.scale[i * nv * nc..(i + 1) * nv * nc],
+            bins,
+        );
+        let (cdf_theta, cdf_phi, norm) = sampling_cdfs(d, &values);
+        Ok(Slice {
+            values,
+            cdf_theta,
+            cdf_phi,
+            norm,
+        })
+    }
+
+    /// Stored slice `i`, decoded once and kept.
+    pub fn slice(&self, i: usize) -> Result<&Slice, TableError> {
+        self.slices[i]
+            .get_or_init(|| self.decode(i).map_err(|e| e.to_string()))
+            .as_ref()
+            .map_err(|e| TableError::Format(e.clone()))
+    }
+
+    fn bin_of(&self, theta: f64, phi: f64) -> (usize, usize) {
+        let r = self.dir.res_deg.to_radians();
+        let it = (((theta + FRAC_PI_2) / r) as usize).min(self.dir.n_theta - 1);
+        let p = phi - TAU * ((phi + PI) / TAU).floor();
+        let jp = (((p + PI) / r) as usize).min(self.dir.n_phi - 1);
+        (it, jp)
+    }
+
+    /// Stored index and flags of incoming direction `wi`, and its φi.
+    pub fn locate(&self, wi: [f64; 3]) -> (usize, bool, bool, f64) {
+        let (t, p) = angles(wi);
+        let (it, jp) = self.bin_of(t, p);
+        let m = self.dir.wi_map[it * self.dir.n_phi + jp];
+        (
+            (m & INDEX_MASK) as usize,
+            m & FLIP_THETA != 0,
+            m & FLIP_DPHI != 0,
+            p,
+        )
+    }
+
+    /// Bin (θo row × Δφ column) of `wo` in the stored slice of `wi`.
+    fn out_bin(&self, flip_t: bool, flip_p: bool, phi_i: f64, wo: [f64; 3]) -> usize {
+        let (t, p) = angles(wo);
+        let t = if flip_t { -t } else { t };
+        let dp = p - phi_i;
+        let dp = if flip_p { -dp } else { dp };
+        let (it, jp) = self.bin_of(t, dp);
+        it * self.dir.n_phi + jp
+    }
+
+    fn check_variant(&self, v: usize) -> Result<(), TableError> {
+        if v >= self.dir.variants.len() {
+            return Err(TableError::Invalid(format!(
+                "variant {v} out of range (file has {})",
+                self.dir.variants.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The normalised BCSDF f̂(ωi, ωo), sr⁻¹, per channel of `variant`.
+    pub fn eval_normalised(
+        &self,
+        wi: [f64; 3],
+        wo: [f64; 3],
+        variant: usize,
+    ) -> Result<Vec<f32>, TableError> {
+        self.check_variant(variant)?;
+        let (s, ft, fp, phi_i) = self.locate(wi);
+        let sl = self.slice(s)?;
+        let b = self.out_bin(ft, fp, phi_i, wo);
+        let (nc, bins) = (self.dir.channels.len(), self.dir.bins());
+        Ok((0..nc)
+            .map(|k| sl.values[(variant * nc + k) * bins + b])
+            .collect())
+    }
+
+    /// The BCSDF f(ωi, ωo) = Λ(ωi)·f̂(ωi, ωo), sr⁻¹, per channel: the fraction of the power
+    /// the fiber intercepts from ωi that leaves per steradian around ωo.
+    pub fn eval(&self, wi: [f64; 3], wo: [f64; 3], variant: usize) -> Result<Vec<f32>, TableError> {
+        let a = self.albedo(wi, variant)?;
+        let mut f = self.eval_normalised(wi, wo, variant)?;
+        for (x, a) in f.iter_mut().zip(a) {
+            *x *= a;
+        }
+        Ok(f)
+    }
+
+    /// Directional albedo Λ(ωi) per channel.
+    pub fn albedo(&self, wi: [f64; 3], variant: usize) -> Result<Vec<f32>, TableError> {
+        self.check_variant(variant)?;
+        let (s, ..) = self.locate(wi);
+        let nc = self.dir.channels.len();
+        let o = (s * self.dir.variants.len() + variant) * nc;
+        Ok(self.dir.albedo[o..o + nc].to_vec())
+    }
+
+    /// Projected width per unit length of the fiber seen from ω, µm (depends on φ only; the
+    /// projected area of a fiber segment of length L is `area_um(ω)·L·cos θ`).
+    pub fn area_um(&self, w: [f64; 3]) -> f64 {
+        let (_, p) = angles(w);
+        let (_, jp) = self.bin_of(0.0, p);
+        self.dir.area_um[jp]
+    }
+
+    /// Density of [`Bcsdf::sample`] at `wo`, sr⁻¹.
+    pub fn pdf(&self, wi: [f64; 3], wo: [f64; 3], variant: usize) -> Result<f64, TableError> {
+        self.check_variant(variant)?;
+        let (s, ft, fp, phi_i) = self.locate(wi);
+        let sl = self.slice(s)?;
+        if sl.norm[variant] <= 0.0 {
+            return Ok(0.0);
+        }
+        let b = self.out_bin(ft, fp, phi_i, wo);
+        let nc = self.dir.channels.len();
+        let bins = self.dir.bins();
+        let p: f64 = (0..nc)
+            .map(|k| sl.values[(variant * nc + k) * bins + b] as f64)
+            .sum::<f64>()
+            / nc as f64;
+        Ok(p / sl.norm[variant])
+    }
+
+    /// Draws ωo from the tabulated density with two uniform numbers in [0, 1): θo row by the
+    /// marginal CDF, Δφ column by the conditional CDF, then uniformly in solid angle within
+    /// the bin (reusing the numbers' remainders). `None` when the variant scatters nothing.
+    pub fn sample(
+        &self,
+        wi: [f64; 3],
+        variant: usize,
+        u1: f64,
+        u2: f64,
+    ) -> Result<Option<Sample>, TableError> {
+        self.check_variant(variant)?;
+        let (s, ft, fp, phi_i) = self.locate(wi);
+        let sl = self.slice(s)?;
+        if sl.norm[variant] <= 0.0 {
+            return Ok(None);
+        }
+        let d = &self.dir;
+        let ct = &sl.cdf_theta[variant];
+        let (it, r1) = pick(ct, u1);
+        let row = &sl.cdf_phi[variant][it * d.n_phi..(it + 1) * d.n_phi];
+        let (jp, r2) = pick(row, u2);
+        let res = d.res_deg.to_radians();
+        let t0 = -FRAC_PI_2 + it as f64 * res;
+        let (s0, s1) = (t0.sin(), (t0 + res).sin());
+        let theta = (s0 + (s1 - s0) * r1).clamp(-1.0, 1.0).asin();
+        let dphi = -PI + (jp as f64 + r2) * res;
+        let theta = if ft { -theta } else { theta };
+        let dphi = if fp { -dphi } else { dphi };
+        let wo = direction(theta, phi_i + dphi);
+        let pdf = self.pdf(wi, wo, variant)?;
+        Ok(Some(Sample { wo, pdf }))
+    }
+}
+
+/// The sampling CDFs of decoded slice values (`[variant][channel][θo][Δφ]`): per variant the
+/// marginal CDF over θo rows, the conditional CDFs over Δφ, and the normaliser Σ p·ΔΩ.
+pub fn sampling_cdfs(d: &Directory, values: &[f32]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f64>) {
+    let (nv, nc) = (d.variants.len(), d.channels.len());
+    let bins = d.bins();
+    let (mut cdf_theta, mut cdf_phi, mut norm) = (Vec::new(), Vec::new(), Vec::new());
+    for v in 0..nv {
+        let pdf = |b: usize| -> f64 {
+            (0..nc)
+                .map(|k| values[(v * nc + k) * bins + b] as f64)
+                .sum::<f64>()
+                / nc as f64
+        };
+        let mut ct = vec![0.0; d.n_theta];
+        let mut cp = vec![0.0; bins];
+        let mut acc = 0.0;
+        for it in 0..d.n_theta {
+            let dw = solid_angle(d.res_deg, it);
+            let mut row = 0.0;
+            for j in 0..d.n_phi {
+                row += pdf(it * d.n_phi + j);
+                cp[it * d.n_phi + j] = row;
+            }
+            if row > 0.0 {
+                for j in 0..d.n_phi {
+                    cp[it * d.n_phi + j] /= row;
+                }
+                cp[it * d.n_phi + d.n_phi - 1] = 1.0;
+            }
+            acc += row * dw;
+            ct[it] = acc;
+        }
+        if acc > 0.0 {
+            for x in &mut ct {
+                *x /= acc;
+            }
+            ct[d.n_theta - 1] = 1.0;
+        }
+        cdf_theta.push(ct);
+        cdf_phi.push(cp);
+        norm.push(acc);
+    }
+    (cdf_theta, cdf_phi, norm)
+}
+
+/// Index of the first CDF entry above `u` and the remainder of `u` rescaled to [0, 1).
+fn pick(cdf: &[f64], u: f64) -> (usize, f64) {
+    let i = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
+    // Skip zero-width entries (empty bins) so the chosen bin has mass.
+    let lo = if i == 0 { 0.0 } else { cdf[i - 1] };
+    let w = cdf[i] - lo;
+    let r = if w > 0.0 {
+        ((u - lo) / w).clamp(0.0, 1.0 - 1e-12)
+    } else {
+        0.5
+    };
+    (i, r)
+}
+
+/// Solid angle of θ row `it` (one Δφ bin) at `res_deg`, sr.
+pub fn solid_angle(res_deg: f64, it: usize) -> f64 {
+    let r = res_deg.to_radians();
+    let t0 = -FRAC_PI_2 + it as f64 * r;
+    r * ((t0 + r).sin() - t0.sin())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small file: res 30°, 2 stored ωi, 1 variant, 2 channels, z-mirror map.
+    fn small(dtype: Precision) -> (Vec<u8>, Vec<Vec<f64>>) {
+        let res = 30.0;
+        let (nt, np) = (6, 12);
+        let wi_deg = vec![[-75.0, 15.0], [-15.0, 15.0]];
+        let mut wi_map = vec![0u32; nt * np];
+        for it in 0..nt {
+            let (s, flip) = match it {
+                0 | 1 => (0, false),
+                2 => (1, false),
+                3 => (1, true),
+                _ => (0, true),
+            };
+            for j in 0..np {
+                wi_map[it * np + j] = s | if flip { FLIP_THETA } else { 0 };
+            }
+        }
+        let dir = Directory {
+            kind: KIND.into(),
+            res_deg: res,
+            n_theta: nt,
+            n_phi: np,
+            wi_deg,
+            wi_map,
+            variants: vec!["undyed".into()],
+            channels: vec!["R".into(), "G".into()],
+            dtype,
+            keep_bits: dtype.mantissa_bits(),
+            scale: vec![],
+            albedo: vec![1.0, 0.9, 0.8, 0.7],
+            albedo_se: vec![0.0; 4],
+            area_um: (0..np).map(|j| 10.0 + j as f64).collect(),
+            chunks: vec![],
+            metadata: serde_json::json!({"test": true}),
+        };
+        let mut w = Writer::new(dir, 3);
+        let mut slices = Vec::new();
+        for s in 0..2 {
+            let mut v = vec![0.0; 2 * nt * np];
+            for k in 0..2 {
+                let mut tot = 0.0;
+                for b in 0..nt * np {
+                    let x = ((b * 7 + s * 3 + k) % 11) as f64;
+                    v[k * nt * np + b] = x;
+                    tot += x * solid_angle(res, b / np);
+                }
+                for b in 0..nt * np {
+                    v[k * nt * np + b] /= tot;
+                }
+            }
+            w.push(&v).unwrap();
+            slices.push(v);
+        }
+        (w.finish().unwrap(), slices)
+    }
+
+    #[test]
+    fn roundtrip_eval_albedo_area_and_flags() {
+        let (bytes, slices) = small(Precision::F32);
+        let f = Bcsdf::from_bytes(bytes).unwrap();
+        // θi = −80°, φi = 20° → stored 0; θi = +80° → stored 0 with θo mirrored.
+        let wi = direction((-80f64).to_radians(), 20f64.to_radians());
+        let wo = direction((35f64).to_radians(), (20f64 + 100.0).to_radians());
+        let got = f.eval_normalised(wi, wo, 0).unwrap();
+        // θo = 35° → row 4; Δφ = 100° → column 9.
+        let b = 4 * 12 + 9;
+        assert!((got[0] as f64 - slices[0][b]).abs() < 1e-7 * slices[0][b].max(1.0));
+        let wi_m = direction((80f64).to_radians(), 20f64.to_radians());
+        let wo_m = direction((-35f64).to_radians(), (20f64 + 100.0).to_radians());
+        assert_eq!(f.eval_normalised(wi_m, wo_m, 0).unwrap(), got);
+        assert_eq!(f.albedo(wi, 0).unwrap(), vec![1.0, 0.9]);
+        let e = f.eval(wi, wo, 0).unwrap();
+        assert!((e[1] - 0.9 * got[1]).abs() < 1e-6);
+        assert_eq!(f.area_um(direction(0.0, (-170f64).to_radians())), 10.0);
+        assert!(f.eval(wi, wo, 1).is_err());
+    }
+
+    #[test]
+    fn sampler_pdf_matches_density_and_integrates_to_one() {
+        let (bytes, _) = small(Precision::F16);
+        let f = Bcsdf::from_bytes(bytes).unwrap();
+        let wi = direction((-20f64).to_radians(), 50f64.to_radians());
+        let mut total = 0.0;
+        for it in 0..6 {
+            for j in 0..12 {
+                let t = (-90.0 + (it as f64 + 0.5) * 30.0).to_radians();
+                let p = 50f64.to_radians() + (-180.0 + (j as f64 + 0.5) * 30.0).to_radians();
+                total += f.pdf(wi, direction(t, p), 0).unwrap() * solid_angle(30.0, it);
+            }
+        }
+        assert!((total - 1.0).abs() < 1e-9, "{total}");
+        for k in 0..200 {
+            let u1 = (k as f64 + 0.5) / 200.0;
+            let u2 = ((k * 37) % 200) as f64 / 200.0;
+            let s = f.sample(wi, 0, u1, u2).unwrap().unwrap();
+            assert!((s.pdf - f.pdf(wi, s.wo, 0).unwrap()).abs() < 1e-12);
+            assert!(s.pdf > 0.0);
+        }
+    }
+
+    #[test]
+    fn corruption_and_truncation_are_errors() {
+        let (mut bytes, _) = small(Precision::F16);
+        let n = bytes.len();
+        assert!(Bcsdf::from_bytes(bytes[..n - 1].to_vec()).is_err());
+        bytes[n - 5] ^= 0xFF;
+        let f = Bcsdf::from_bytes(bytes);
+        // Either zstd or the CRC rejects the damaged chunk.
+        let f = f.unwrap();
+        assert!(f.decode(1).is_err());
+    }
+
+    #[test]
+    fn bitround_keeps_the_requested_precision() {
+        for &x in &[1.0f32, 0.123_456_7, 3.3e-5, 47_000.0] {
+            let r = round_f32(x, 7);
+            assert!(((r - x) / x).abs() <= 2f32.powi(-8), "{x} {r}");
+            assert_eq!(r.to_bits() & ((1 << 16) - 1), 0);
+        }
+    }
+}
