@@ -11,6 +11,12 @@
 //! fused row of all channels per grid point). With step Δ ≤ 0.02/μa,max the interpolation
 //! error of each exponential is ≤ (μa Δ)²/8 = 5·10⁻⁵ of its value; paths beyond the table
 //! (rare: long internal trapping) are evaluated exactly.
+//!
+//! Cost: each exiting photon still adds one row of all channels, so a wide sweep costs more
+//! than a single variant (measured: 7 variants × RGB ≈ 1.9× one variant). The alternative
+//! not built yet: accumulate a per-bin histogram over ℓ (tent-weighted onto this grid, two
+//! adds per photon whatever the sweep) and multiply it by the channel table at the end —
+//! exactly the same interpolated result, at a cost independent of the number of variants.
 
 use crate::spectral::ColourMap;
 
