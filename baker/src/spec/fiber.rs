@@ -682,6 +682,9 @@ impl Ctx {
         } else {
             variants.push(dye.clone());
         }
+        // With a sweep, the entry's representative dyeing (what `fiber trace` and `validate`
+        // use) is its first dyed variant.
+        let dye = dye.or_else(|| variants.iter().flatten().next().cloned());
         let symmetry = match &r.symmetry {
             Some(sy) => self.choice(
                 "fibers.symmetry",
