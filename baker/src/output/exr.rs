@@ -50,28 +50,13 @@ pub fn write(
         )),
         ..LayerAttributes::default()
     };
-    let layer = Layer::new(
-        (w, h),
-        attrs,
-        Encoding {
-            compression: Compression::ZIP16,
-            blocks: Blocks::ScanLines,
-            line_order: LineOrder::Increasing,
-        },
-        channels,
-    );
+    let layer = zip_layer((w, h), attrs, channels);
     let mut image = Image::from_layer(layer);
     image.attributes.other.insert(
         Text::from("entries"),
         AttributeValue::Text(Text::from(serde_json::to_string(names)?.as_str())),
     );
-    let mut buf = std::io::Cursor::new(Vec::new());
-    image
-        .write()
-        .non_parallel()
-        .to_buffered(&mut buf)
-        .map_err(|e| anyhow::anyhow!("encoding {}: {e}", path.display()))?;
-    atomic::write(path, buf.get_ref()).with_context(|| format!("writing {}", path.display()))
+    encode_and_write(path, image)
 }
 
 /// Writes a linear RGB float image (`w × h`, rows top to bottom) with a comment, ZIP
@@ -93,8 +78,19 @@ pub fn write_rgb(
         comments: Some(Text::from(comment)),
         ..LayerAttributes::default()
     };
-    let layer = Layer::new(
-        (w, h),
+    let layer = zip_layer((w, h), attrs, channels);
+    let image = Image::from_layer(layer);
+    encode_and_write(path, image)
+}
+
+/// A scan-line layer with lossless ZIP compression, lines in increasing order.
+fn zip_layer(
+    size: (usize, usize),
+    attrs: LayerAttributes,
+    channels: AnyChannels<FlatSamples>,
+) -> Layer<AnyChannels<FlatSamples>> {
+    Layer::new(
+        size,
         attrs,
         Encoding {
             compression: Compression::ZIP16,
@@ -102,8 +98,14 @@ pub fn write_rgb(
             line_order: LineOrder::Increasing,
         },
         channels,
-    );
-    let image = Image::from_layer(layer);
+    )
+}
+
+/// Encodes `image` in memory and writes it atomically.
+fn encode_and_write(
+    path: &Path,
+    image: Image<Layer<AnyChannels<FlatSamples>>>,
+) -> anyhow::Result<()> {
     let mut buf = std::io::Cursor::new(Vec::new());
     image
         .write()
