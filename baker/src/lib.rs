@@ -5,6 +5,7 @@
 //! MCML input files), [`cli`] (the commands behind the `baker` binary).
 
 pub mod cli;
+pub mod export;
 pub mod fiber;
 pub mod fit;
 pub mod output;

@@ -46,7 +46,7 @@ use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
-use crate::table::{crc32, TableError};
+use crate::table::{crc32, decompress, TableError};
 
 /// The first 8 bytes of every file.
 pub const MAGIC: [u8; 8] = *b"BAKERFIB";
@@ -166,7 +166,20 @@ impl Directory {
         if w == 0 || v == 0 || c == 0 {
             return bad("no stored direction, variant or channel".into());
         }
-        if self.wi_map.len() != self.bins() {
+        let finite = |x: &[f32]| x.iter().all(|v| v.is_finite() && *v >= 0.0);
+        if !finite(&self.scale) || !finite(&self.albedo) || !finite(&self.albedo_se) {
+            return bad("scale or albedo values are negative or not finite".into());
+        }
+        if self
+            .wi_deg
+            .iter()
+            .flatten()
+            .chain(&self.area_um)
+            .any(|v| !v.is_finite())
+        {
+            return bad("wi_deg or area_um values are not finite".into());
+        }
+        if self.n_theta.checked_mul(self.n_phi).is_none() || self.wi_map.len() != self.bins() {
             return bad(format!(
                 "wi_map has {} entries, expected {}",
                 self.wi_map.len(),
@@ -194,8 +207,10 @@ impl Directory {
                 self.keep_bits
             ));
         }
-        let raw = (v * c * self.bins() * self.dtype.size()) as u64;
-        if self.chunks.iter().any(|k| k.raw_bytes != raw) {
+        let raw = [v, c, self.bins(), self.dtype.size()]
+            .iter()
+            .try_fold(1u64, |acc, &x| acc.checked_mul(x as u64));
+        if self.chunks.iter().any(|k| Some(k.raw_bytes) != raw) {
             return bad("a chunk's raw size disagrees with the grid".into());
         }
         Ok(())
@@ -384,6 +399,18 @@ pub fn angles(w: [f64; 3]) -> (f64, f64) {
     ((w[2] / n).clamp(-1.0, 1.0).asin(), w[1].atan2(w[0]))
 }
 
+/// A direction must be finite and non-zero (it need not be normalised).
+fn check_dir(w: [f64; 3]) -> Result<(), TableError> {
+    let n2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    if n2.is_finite() && n2 > 0.0 {
+        Ok(())
+    } else {
+        Err(TableError::Invalid(format!(
+            "direction {w:?} is zero or not finite"
+        )))
+    }
+}
+
 /// Unit vector of θ, φ (radians).
 pub fn direction(theta: f64, phi: f64) -> [f64; 3] {
     let (st, ct) = theta.sin_cos();
@@ -424,7 +451,10 @@ impl Bcsdf {
             path: p.to_path_buf(),
             source,
         })?;
-        Self::from_bytes(bytes)
+        Self::from_bytes(bytes).map_err(|e| match e {
+            TableError::Format(m) => TableError::Format(format!("{}: {m}", p.display())),
+            other => other,
+        })
     }
 
     /// Parses a whole file held in memory.
@@ -439,6 +469,9 @@ impl Bcsdf {
         if version != VERSION {
             return Err(TableError::UnsupportedVersion(version));
         }
+        if u32_at(&b, 12) != 0 || u32_at(&b, 44) != 0 {
+            return Err(fmt("unknown flags or non-zero reserved field"));
+        }
         let (dc, dr, pl) = (u64_at(&b, 16), u64_at(&b, 24), u64_at(&b, 32));
         let crc = u32_at(&b, 40);
         let end = (HEADER_LEN as u64)
@@ -449,8 +482,7 @@ impl Bcsdf {
             return Err(fmt("file size disagrees with the header (truncated?)"));
         }
         let dstart = HEADER_LEN + dc as usize;
-        let json = zstd::bulk::decompress(&b[HEADER_LEN..dstart], dr as usize)
-            .map_err(|e| TableError::Format(format!("directory: {e}")))?;
+        let json = decompress(&b[HEADER_LEN..dstart], dr, "directory")?;
         let computed = crc32(&json);
         if computed != crc {
             return Err(TableError::Checksum {
@@ -481,10 +513,11 @@ impl Bcsdf {
     /// Decodes stored slice `i` (without caching).
     pub fn decode(&self, i: usize) -> Result<Slice, TableError> {
         let d = &self.dir;
-        let c = &d.chunks[i];
+        let c = d.chunks.get(i).ok_or_else(|| {
+            TableError::Invalid(format!("no stored direction {i} (file has {})", d.n_wi()))
+        })?;
         let frame = &self.payload[c.offset as usize..(c.offset + c.compressed_bytes) as usize];
-        let raw = zstd::bulk::decompress(frame, c.raw_bytes as usize)
-            .map_err(|e| TableError::Format(format!("chunk {i}: {e}")))?;
+        let raw = decompress(frame, c.raw_bytes, &format!("chunk {i}"))?;
         let computed = crc32(&raw);
         if computed != c.crc32 || raw.len() as u64 != c.raw_bytes {
             return Err(TableError::Checksum {
@@ -512,8 +545,13 @@ impl Bcsdf {
 
     /// Stored slice `i`, decoded once and kept.
     pub fn slice(&self, i: usize) -> Result<&Slice, TableError> {
-        self.slices[i]
-            .get_or_init(|| self.decode(i).map_err(|e| e.to_string()))
+        let cell = self.slices.get(i).ok_or_else(|| {
+            TableError::Invalid(format!(
+                "no stored direction {i} (file has {})",
+                self.dir.n_wi()
+            ))
+        })?;
+        cell.get_or_init(|| self.decode(i).map_err(|e| e.to_string()))
             .as_ref()
             .map_err(|e| TableError::Format(e.clone()))
     }
@@ -567,6 +605,8 @@ impl Bcsdf {
         variant: usize,
     ) -> Result<Vec<f32>, TableError> {
         self.check_variant(variant)?;
+        check_dir(wi)?;
+        check_dir(wo)?;
         let (s, ft, fp, phi_i) = self.locate(wi);
         let sl = self.slice(s)?;
         let b = self.out_bin(ft, fp, phi_i, wo);
@@ -590,10 +630,18 @@ impl Bcsdf {
     /// Directional albedo Λ(ωi) per channel.
     pub fn albedo(&self, wi: [f64; 3], variant: usize) -> Result<Vec<f32>, TableError> {
         self.check_variant(variant)?;
+        check_dir(wi)?;
         let (s, ..) = self.locate(wi);
         let nc = self.dir.channels.len();
         let o = (s * self.dir.variants.len() + variant) * nc;
         Ok(self.dir.albedo[o..o + nc].to_vec())
+    }
+
+    /// Projected area A(ω) of a unit length of fiber seen from ω, in µm (µm² per µm of
+    /// length): the projected width at φ times cos θ (thesis Eq. 17 with the fiber axis +z).
+    pub fn projected_area(&self, w: [f64; 3]) -> f64 {
+        let (t, _) = angles(w);
+        self.area_um(w) * t.cos()
     }
 
     /// Projected width per unit length of the fiber seen from ω, µm (depends on φ only; the
@@ -607,6 +655,8 @@ impl Bcsdf {
     /// Density of [`Bcsdf::sample`] at `wo`, sr⁻¹.
     pub fn pdf(&self, wi: [f64; 3], wo: [f64; 3], variant: usize) -> Result<f64, TableError> {
         self.check_variant(variant)?;
+        check_dir(wi)?;
+        check_dir(wo)?;
         let (s, ft, fp, phi_i) = self.locate(wi);
         let sl = self.slice(s)?;
         if sl.norm[variant] <= 0.0 {
@@ -633,6 +683,7 @@ impl Bcsdf {
         u2: f64,
     ) -> Result<Option<Sample>, TableError> {
         self.check_variant(variant)?;
+        check_dir(wi)?;
         let (s, ft, fp, phi_i) = self.locate(wi);
         let sl = self.slice(s)?;
         if sl.norm[variant] <= 0.0 {

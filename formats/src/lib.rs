@@ -5,10 +5,14 @@
 
 pub mod bcsdf;
 pub mod optics;
+pub mod profile;
 pub mod table;
 
 pub use bcsdf::{Bcsdf, Precision};
+/// The fiber BCSDF table reader under the name the renderer-facing docs use.
+pub type BcsdfTable = Bcsdf;
 pub use optics::{
     OpticsDocument, OpticsEntry, OpticsError, OpticsJunction, OpticsLayer, OpticsSurface,
 };
-pub use table::{Array, DType, Data, TableError, TableFile};
+pub use profile::{Gaussians, ProfileData, ProfileEntry, ProfileTable};
+pub use table::{Array, DType, Data, IndexEntry, TableError, TableFile, TableIndex};

@@ -383,10 +383,10 @@ impl fmt::Display for TableError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             TableError::Io { path, source } => write!(f, "{}: {source}", path.display()),
-            TableError::Format(m) => write!(f, "not a valid .bkt table: {m}"),
+            TableError::Format(m) => write!(f, "not a valid baker table: {m}"),
             TableError::UnsupportedVersion(v) => write!(
                 f,
-                ".bkt format version {v} is not supported (this reader: {VERSION})"
+                "table format version {v} is not supported (this reader: {VERSION})"
             ),
             TableError::Checksum {
                 part,
@@ -394,7 +394,7 @@ impl fmt::Display for TableError {
                 computed,
             } => write!(
                 f,
-                "corrupted .bkt table: CRC-32 of {part} is {computed:08x}, the file stores \
+                "corrupted table: CRC-32 of {part} is {computed:08x}, the file stores \
                  {stored:08x}"
             ),
             TableError::Invalid(m) => write!(f, "invalid table content: {m}"),
@@ -554,148 +554,16 @@ impl TableFile {
     }
 
     /// Parses and fully validates a table: header, directory, bounds, shapes, checksums.
-    /// Never panics on malformed input.
+    /// Never panics on malformed input; allocates at most what the frames actually decode
+    /// to (see [`TableIndex`]).
     pub fn from_bytes(b: &[u8]) -> Result<TableFile, TableError> {
-        let fmt_err = TableError::Format;
-        if b.len() < HEADER_LEN {
-            if !b.is_empty() && !MAGIC.starts_with(&b[..b.len().min(8)]) {
-                return Err(fmt_err("bad magic (expected \"BAKERTBL\")".into()));
-            }
-            return Err(fmt_err(format!(
-                "{} bytes is shorter than the {HEADER_LEN}-byte header",
-                b.len()
-            )));
-        }
-        if b[..8] != MAGIC {
-            return Err(fmt_err("bad magic (expected \"BAKERTBL\")".into()));
-        }
-        let u32_at = |o: usize| u32::from_le_bytes(b[o..o + 4].try_into().unwrap());
-        let u64_at = |o: usize| u64::from_le_bytes(b[o..o + 8].try_into().unwrap());
-        let version = u32_at(8);
-        if version != VERSION {
-            return Err(TableError::UnsupportedVersion(version));
-        }
-        let flags = u32_at(12);
-        if flags != 0 {
-            return Err(fmt_err(format!(
-                "unknown flags {flags:#x} (version 1 defines none)"
-            )));
-        }
-        let dir_compressed = u64_at(16);
-        let dir_raw = u64_at(24);
-        let payload_len = u64_at(32);
-        let dir_crc = u32_at(40);
-        let reserved = u32_at(44);
-        if reserved != 0 {
-            return Err(fmt_err(format!(
-                "reserved header field is {reserved:#x}, must be 0"
-            )));
-        }
-        let body = (b.len() - HEADER_LEN) as u64;
-        let expected = dir_compressed.checked_add(payload_len);
-        if expected != Some(body) {
-            return Err(fmt_err(format!(
-                "header declares a {dir_compressed}-byte directory and a {payload_len}-byte \
-                 payload, but {body} bytes follow the header (truncated or trailing data)"
-            )));
-        }
-        // Both fit in `b`, hence in usize.
-        let dir_end = HEADER_LEN + dir_compressed as usize;
-        let dir_bytes = decompress(&b[HEADER_LEN..dir_end], dir_raw, "the directory")?;
-        let computed = crc32(&dir_bytes);
-        if computed != dir_crc {
-            return Err(TableError::Checksum {
-                part: "directory".into(),
-                stored: dir_crc,
-                computed,
-            });
-        }
-        let dir: DirectoryIn = serde_json::from_slice(&dir_bytes)
-            .map_err(|e| fmt_err(format!("directory is not valid JSON of the format: {e}")))?;
-        drop(dir_bytes);
-        if dir.kind.is_empty() {
-            return Err(fmt_err("the table kind is empty".into()));
-        }
-
-        let payload = &b[dir_end..];
-        let mut names = BTreeSet::new();
-        let mut next_offset = 0u64;
-        let mut arrays = Vec::with_capacity(dir.arrays.len().min(1 << 16));
-        for (i, e) in dir.arrays.into_iter().enumerate() {
-            let what = format!("array {:?}", e.name);
-            check_name(&e.name).map_err(|m| fmt_err(format!("array #{i}: {m}")))?;
-            if !names.insert(e.name.clone()) {
-                return Err(fmt_err(format!("duplicate array name {:?}", e.name)));
-            }
-            let dtype = DType::from_code(&e.dtype).ok_or_else(|| {
-                fmt_err(format!(
-                    "{what}: unknown dtype {:?} (expected f64, f32, u32 or u64)",
-                    e.dtype
-                ))
-            })?;
-            let count = element_count(&e.shape).ok_or_else(|| {
-                fmt_err(format!(
-                    "{what}: element count of shape {:?} overflows",
-                    e.shape
-                ))
-            })?;
-            if count.checked_mul(dtype.size() as u64) != Some(e.raw_bytes) {
-                return Err(fmt_err(format!(
-                    "{what}: shape {:?} of {dtype} needs {count} × {} bytes, the directory says \
-                     raw_bytes = {}",
-                    e.shape,
-                    dtype.size(),
-                    e.raw_bytes
-                )));
-            }
-            if e.offset != next_offset {
-                return Err(fmt_err(format!(
-                    "{what}: offset {} but frames must be back to back (expected {next_offset})",
-                    e.offset
-                )));
-            }
-            let end = e
-                .offset
-                .checked_add(e.compressed_bytes)
-                .filter(|&end| end <= payload_len)
-                .ok_or_else(|| {
-                    fmt_err(format!(
-                        "{what}: frame at {} + {} bytes runs past the {payload_len}-byte payload",
-                        e.offset, e.compressed_bytes
-                    ))
-                })?;
-            next_offset = end;
-            let raw = decompress(
-                &payload[e.offset as usize..end as usize],
-                e.raw_bytes,
-                &what,
-            )?;
-            let computed = crc32(&raw);
-            if computed != e.crc32 {
-                return Err(TableError::Checksum {
-                    part: what,
-                    stored: e.crc32,
-                    computed,
-                });
-            }
-            // Length is count × size, checked above.
-            let data = Data::from_le_bytes(dtype, &raw)
-                .ok_or_else(|| fmt_err(format!("{what}: ragged element data")))?;
-            arrays.push(Array {
-                name: e.name,
-                shape: e.shape,
-                data,
-                attrs: e.attrs,
-            });
-        }
-        if next_offset != payload_len {
-            return Err(fmt_err(format!(
-                "the arrays' frames cover {next_offset} bytes of the {payload_len}-byte payload"
-            )));
-        }
+        let index = TableIndex::from_bytes(b.to_vec())?;
+        let arrays = (0..index.entries.len())
+            .map(|i| index.read_at(i))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(TableFile {
-            kind: dir.kind,
-            metadata: dir.metadata,
+            kind: index.kind,
+            metadata: index.metadata,
             arrays,
         })
     }
@@ -771,8 +639,248 @@ fn compress(
         .map_err(|e| TableError::Compression(format!("{what}: {e}")))
 }
 
+/// One array of a [`TableIndex`]: where it lies and what it holds, before decoding.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IndexEntry {
+    pub name: String,
+    pub dtype: DType,
+    pub shape: Vec<u64>,
+    pub attrs: BTreeMap<String, String>,
+    offset: u64,
+    compressed_bytes: u64,
+    raw_bytes: u64,
+    crc32: u32,
+}
+
+impl IndexEntry {
+    /// Decoded size in bytes.
+    pub fn raw_bytes(&self) -> u64 {
+        self.raw_bytes
+    }
+}
+
+/// A table whose header and directory are read and checked, with its arrays decoded on
+/// demand ([`TableIndex::array`]): what a renderer uses to load one entry of a large table.
+///
+/// Reading never panics on malformed input. Memory: the file's bytes, plus, per decoded
+/// array, at most twice the bytes its zstd frame actually decompresses to (never more than
+/// the declared size + 1): a size field alone never causes an allocation.
+#[derive(Debug, Clone)]
+pub struct TableIndex {
+    pub kind: String,
+    pub metadata: serde_json::Value,
+    entries: Vec<IndexEntry>,
+    by_name: BTreeMap<String, usize>,
+    /// The whole file; frames are at `payload_start + offset`.
+    bytes: Vec<u8>,
+    payload_start: usize,
+}
+
+impl TableIndex {
+    /// Reads a file's header and directory.
+    pub fn open(path: impl AsRef<Path>) -> Result<TableIndex, TableError> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|source| TableError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        TableIndex::from_bytes(bytes).map_err(|e| match e {
+            TableError::Format(m) => TableError::Format(format!("{}: {m}", path.display())),
+            other => other,
+        })
+    }
+
+    /// Checks the header and directory of a file held in memory (the arrays' frames are
+    /// checked when they are decoded).
+    pub fn from_bytes(b: Vec<u8>) -> Result<TableIndex, TableError> {
+        let fmt_err = TableError::Format;
+        if b.len() < HEADER_LEN {
+            if !b.is_empty() && !MAGIC.starts_with(&b[..b.len().min(8)]) {
+                return Err(fmt_err("bad magic (expected \"BAKERTBL\")".into()));
+            }
+            return Err(fmt_err(format!(
+                "{} bytes is shorter than the {HEADER_LEN}-byte header",
+                b.len()
+            )));
+        }
+        if b[..8] != MAGIC {
+            return Err(fmt_err("bad magic (expected \"BAKERTBL\")".into()));
+        }
+        let u32_at = |o: usize| u32::from_le_bytes(b[o..o + 4].try_into().unwrap());
+        let u64_at = |o: usize| u64::from_le_bytes(b[o..o + 8].try_into().unwrap());
+        let version = u32_at(8);
+        if version != VERSION {
+            return Err(TableError::UnsupportedVersion(version));
+        }
+        let flags = u32_at(12);
+        if flags != 0 {
+            return Err(fmt_err(format!(
+                "unknown flags {flags:#x} (version 1 defines none)"
+            )));
+        }
+        let dir_compressed = u64_at(16);
+        let dir_raw = u64_at(24);
+        let payload_len = u64_at(32);
+        let dir_crc = u32_at(40);
+        let reserved = u32_at(44);
+        if reserved != 0 {
+            return Err(fmt_err(format!(
+                "reserved header field is {reserved:#x}, must be 0"
+            )));
+        }
+        let body = (b.len() - HEADER_LEN) as u64;
+        let expected = dir_compressed.checked_add(payload_len);
+        if expected != Some(body) {
+            return Err(fmt_err(format!(
+                "header declares a {dir_compressed}-byte directory and a {payload_len}-byte \
+                 payload, but {body} bytes follow the header (truncated or trailing data)"
+            )));
+        }
+        // Both fit in `b`, hence in usize.
+        let dir_end = HEADER_LEN + dir_compressed as usize;
+        let dir_bytes = decompress(&b[HEADER_LEN..dir_end], dir_raw, "the directory")?;
+        let computed = crc32(&dir_bytes);
+        if computed != dir_crc {
+            return Err(TableError::Checksum {
+                part: "directory".into(),
+                stored: dir_crc,
+                computed,
+            });
+        }
+        let dir: DirectoryIn = serde_json::from_slice(&dir_bytes)
+            .map_err(|e| fmt_err(format!("directory is not valid JSON of the format: {e}")))?;
+        drop(dir_bytes);
+        if dir.kind.is_empty() {
+            return Err(fmt_err("the table kind is empty".into()));
+        }
+
+        let mut names = BTreeMap::new();
+        let mut next_offset = 0u64;
+        let mut entries = Vec::with_capacity(dir.arrays.len().min(1 << 16));
+        for (i, e) in dir.arrays.into_iter().enumerate() {
+            let what = format!("array {:?}", e.name);
+            check_name(&e.name).map_err(|m| fmt_err(format!("array #{i}: {m}")))?;
+            if names.insert(e.name.clone(), i).is_some() {
+                return Err(fmt_err(format!("duplicate array name {:?}", e.name)));
+            }
+            let dtype = DType::from_code(&e.dtype).ok_or_else(|| {
+                fmt_err(format!(
+                    "{what}: unknown dtype {:?} (expected f64, f32, u32 or u64)",
+                    e.dtype
+                ))
+            })?;
+            let count = element_count(&e.shape).ok_or_else(|| {
+                fmt_err(format!(
+                    "{what}: element count of shape {:?} overflows",
+                    e.shape
+                ))
+            })?;
+            if count.checked_mul(dtype.size() as u64) != Some(e.raw_bytes) {
+                return Err(fmt_err(format!(
+                    "{what}: shape {:?} of {dtype} needs {count} × {} bytes, the directory says \
+                     raw_bytes = {}",
+                    e.shape,
+                    dtype.size(),
+                    e.raw_bytes
+                )));
+            }
+            if e.offset != next_offset {
+                return Err(fmt_err(format!(
+                    "{what}: offset {} but frames must be back to back (expected {next_offset})",
+                    e.offset
+                )));
+            }
+            next_offset = e
+                .offset
+                .checked_add(e.compressed_bytes)
+                .filter(|&end| end <= payload_len)
+                .ok_or_else(|| {
+                    fmt_err(format!(
+                        "{what}: frame at {} + {} bytes runs past the {payload_len}-byte payload",
+                        e.offset, e.compressed_bytes
+                    ))
+                })?;
+            entries.push(IndexEntry {
+                name: e.name,
+                dtype,
+                shape: e.shape,
+                attrs: e.attrs,
+                offset: e.offset,
+                compressed_bytes: e.compressed_bytes,
+                raw_bytes: e.raw_bytes,
+                crc32: e.crc32,
+            });
+        }
+        if next_offset != payload_len {
+            return Err(fmt_err(format!(
+                "the arrays' frames cover {next_offset} bytes of the {payload_len}-byte payload"
+            )));
+        }
+        Ok(TableIndex {
+            kind: dir.kind,
+            metadata: dir.metadata,
+            entries,
+            by_name: names,
+            bytes: b,
+            payload_start: dir_end,
+        })
+    }
+
+    /// The arrays, in file order.
+    pub fn entries(&self) -> &[IndexEntry] {
+        &self.entries
+    }
+
+    /// The array called `name`, undecoded.
+    pub fn entry(&self, name: &str) -> Option<&IndexEntry> {
+        self.by_name.get(name).map(|&i| &self.entries[i])
+    }
+
+    /// Decodes (and checks) the array called `name`; `Ok(None)` if there is none.
+    pub fn array(&self, name: &str) -> Result<Option<Array>, TableError> {
+        match self.by_name.get(name) {
+            Some(&i) => self.read_at(i).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    /// Decodes (and checks) array number `i` in file order.
+    pub fn read_at(&self, i: usize) -> Result<Array, TableError> {
+        let e = self
+            .entries
+            .get(i)
+            .ok_or_else(|| TableError::Invalid(format!("no array #{i}")))?;
+        let what = format!("array {:?}", e.name);
+        // Bounds were checked against the payload when the directory was read.
+        let start = self.payload_start + e.offset as usize;
+        let frame = &self.bytes[start..start + e.compressed_bytes as usize];
+        let raw = decompress(frame, e.raw_bytes, &what)?;
+        let computed = crc32(&raw);
+        if computed != e.crc32 {
+            return Err(TableError::Checksum {
+                part: what,
+                stored: e.crc32,
+                computed,
+            });
+        }
+        let data = Data::from_le_bytes(e.dtype, &raw)
+            .ok_or_else(|| TableError::Format(format!("{what}: ragged element data")))?;
+        Ok(Array {
+            name: e.name.clone(),
+            shape: e.shape.clone(),
+            data,
+            attrs: e.attrs.clone(),
+        })
+    }
+}
+
 /// Decompresses exactly one zstd frame that must fill `src` and yield `raw_len` bytes.
-fn decompress(src: &[u8], raw_len: u64, what: &str) -> Result<Vec<u8>, TableError> {
+///
+/// The output grows with what the frame actually yields and stops one byte past `raw_len`,
+/// so a corrupted size field cannot make the reader allocate: memory is at most twice the
+/// bytes the frame really holds, and never more than about twice `raw_len`.
+pub(crate) fn decompress(src: &[u8], raw_len: u64, what: &str) -> Result<Vec<u8>, TableError> {
+    use std::io::Read as _;
     use zstd::zstd_safe;
     let bad = |m: String| TableError::Format(format!("{what}: {m}"));
     let frame_len = zstd_safe::find_frame_compressed_size(src).map_err(|code| {
@@ -796,14 +904,17 @@ fn decompress(src: &[u8], raw_len: u64, what: &str) -> Result<Vec<u8>, TableErro
         Ok(_) => {}
         Err(_) => return Err(bad("unreadable zstd frame header".into())),
     }
-    let cap = usize::try_from(raw_len)
-        .map_err(|_| bad(format!("{raw_len} bytes do not fit in memory")))?;
+    // Start small: a valid frame compresses at most ~32768:1, a corrupted one may lie.
+    let first = raw_len.min(4 * src.len() as u64 + 4096) as usize;
     let mut out = Vec::new();
-    out.try_reserve_exact(cap)
-        .map_err(|e| bad(format!("cannot allocate {raw_len} bytes: {e}")))?;
-    let mut d = zstd::bulk::Decompressor::new()
-        .map_err(|e| bad(format!("cannot create a zstd decompressor: {e}")))?;
-    d.decompress_to_buffer(src, &mut out)
+    out.try_reserve_exact(first)
+        .map_err(|e| bad(format!("cannot allocate {first} bytes: {e}")))?;
+    let decoder = zstd::stream::read::Decoder::with_buffer(src)
+        .map_err(|e| bad(format!("cannot create a zstd decompressor: {e}")))?
+        .single_frame();
+    decoder
+        .take(raw_len.saturating_add(1))
+        .read_to_end(&mut out)
         .map_err(|e| bad(format!("zstd decompression failed: {e}")))?;
     if out.len() as u64 != raw_len {
         return Err(bad(format!(

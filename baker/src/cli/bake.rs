@@ -266,6 +266,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
             ("format".into(), tables::FORMAT.into()),
             ("format_version".into(), u64::from(tables::FORMAT_VERSION).into()),
             ("spec_file".into(), spec.file.clone().into()),
+            ("spec_sha256".into(), manifest::spec_sha256(&spec.file).into()),
             ("baker_version".into(), env!("CARGO_PKG_VERSION").into()),
             ("photons".into(), photons.into()),
             ("seed".into(), settings.seed.into()),
@@ -287,6 +288,9 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         ],
             groups: vec![tables::colour_group(&colour)],
         };
+    if let Some(c) = manifest::created_utc() {
+        t.attrs.push(("created_utc".into(), c.into()));
+    }
     for ((e, p), r) in entries.iter().zip(&spectral).zip(&rgb) {
         t.groups
             .push(tables::entry_group(e, entry_attrs(e, p), p, r));
@@ -363,9 +367,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         "format": "baker-manifest",
         "version": 1,
         "spec_file": spec.file,
-        "spec_sha256": manifest::file_entry(Path::new(""), &spec.file, "")
-            .map(|f| f.sha256)
-            .unwrap_or_default(),
+        "spec_sha256": manifest::spec_sha256(&spec.file),
         "baker_version": env!("CARGO_PKG_VERSION"),
         "settings": {
             "photons": photons,

@@ -157,6 +157,7 @@ fn bake_entry(
     st: &BakeSettings,
 ) -> anyhow::Result<(EntryReport, Vec<(String, String)>)> {
     let t0 = Instant::now();
+    let spec_sha = crate::output::manifest::spec_sha256(&spec.file);
     let grid = AngularGrid::new(st.res_deg).map_err(anyhow::Error::msg)?;
     let fibers: Vec<Fiber> = (0..e.sections)
         .map(|s| e.section_variant(s).map(|sec| e.fiber_with(sec)))
@@ -270,6 +271,8 @@ fn bake_entry(
                     "symmetry": sym, "photons_per_direction": st.photons.div_ceil(st.batch).max(2) * st.batch,
                     "split": st.split, "seed": st.seed, "lambda_nm": st.lambda_nm,
                     "channels": st.channels,
+                    "spec_sha256": spec_sha, "baker_version": env!("CARGO_PKG_VERSION"),
+                    "created_utc": crate::output::manifest::created_utc(),
                 }),
             };
             let g = file
@@ -449,6 +452,9 @@ fn bake_entry(
             let ch = g.new_dataset::<h5::types::VarLenUnicode>().obj_track_times(false).shape([nc]).create("channel")?;
             let cnames: Vec<h5::types::VarLenUnicode> = channels.channel_names.iter().map(|s| s.parse().unwrap()).collect();
             ch.write_raw(&cnames)?;
+            for (d, u) in [(&th_i, "degree"), (&ph_i, "degree"), (&th_o, "degree"), (&dphi, "degree"), (&phi, "degree"), (&albedo, "1"), (&albedo_se, "1"), (&o.cdf_theta, "1"), (&o.cdf_phi, "1"), (&wmap, "1")] {
+                h5out::text_attr(d, "units", u)?;
+            }
             h5out::attach_scale(&th_i, "theta_i_deg", &[(&o.f, 0), (&albedo, 0), (&albedo_se, 0), (&o.cdf_theta, 0), (&o.cdf_phi, 0)])?;
             h5out::attach_scale(&ph_i, "phi_i_deg", &[(&o.f, 0), (&albedo, 0), (&albedo_se, 0), (&o.cdf_theta, 0), (&o.cdf_phi, 0)])?;
             h5out::attach_scale(&var, "variant", &[(&o.f, 1), (&albedo, 1), (&albedo_se, 1), (&o.cdf_theta, 1), (&o.cdf_phi, 1)])?;

@@ -19,6 +19,7 @@ macro_rules! out {
 mod bake;
 mod bake_fiber;
 mod bench;
+mod export;
 mod fiber;
 mod mc;
 mod optics;
@@ -65,6 +66,9 @@ pub enum Command {
     Fiber(fiber::FiberCommand),
     /// Bake whole specs into `--out` (default `out/`): every product of every entry.
     Bake(bake::BakeArgs),
+    /// Convert a baked table to the parameters a renderer takes: Burley/OpenPBR/MaterialX,
+    /// Blender, Unreal, Unity, pbrt-v4, Mitsuba 3 (skin); Chiang hair (fibers).
+    Export(export::ExportArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -124,6 +128,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Mc(a) => mc::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Fiber(c) => fiber::run(c),
+        Command::Export(a) => export::run(a),
     }
 }
 
