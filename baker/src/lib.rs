@@ -9,6 +9,7 @@ pub mod export;
 pub mod fiber;
 pub mod fit;
 pub mod output;
+pub mod pipeline;
 pub mod profile;
 pub mod skin;
 pub mod spec;

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use super::{load_spec, UsageError};
 use crate::output::{self, atomic, manifest, preview, tables};
+use crate::pipeline::{interrupt, Cache, CacheMode, Events, ProgressMode, Runner, Shard};
 use crate::profile::{self, RgbProfile, SimOptions, SpectralProfile};
 use crate::spec::SkinSpec;
 use crate::spectral::ColourMap;
@@ -51,6 +52,52 @@ pub struct BakeArgs {
     /// Also write PNG plots of every entry's coefficients.
     #[arg(long)]
     pub plots: bool,
+    /// Progress: `auto` (a bar on a terminal, a line every ~5 % otherwise), `bar`, `json`
+    /// (one JSON event per line on stderr, for pipeline tools), `none`.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub progress: ProgressMode,
+    /// Bake only the work units of shard I of N (1 ≤ I ≤ N) into OUT (their cache and
+    /// `shard.json`); `baker merge` assembles the tables from all shards.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<Shard>,
+    /// Recompute every work unit even if it is cached (and overwrite the cache).
+    #[arg(long)]
+    pub force: bool,
+    /// Unit cache directory (default: OUT/.cache).
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// `baker merge`: every unit must come from the cache (set by merge, not a flag).
+    #[arg(skip)]
+    pub require_cached: bool,
+}
+
+impl BakeArgs {
+    /// Whether people get messages, bars and progress lines on stderr.
+    pub fn human(&self) -> bool {
+        !self.quiet && matches!(self.progress, ProgressMode::Auto | ProgressMode::Bar)
+    }
+
+    fn runner(&self) -> Runner {
+        let mode = if self.force {
+            CacheMode::Force
+        } else {
+            CacheMode::Use
+        };
+        let cache = Cache::new(
+            self.cache
+                .clone()
+                .unwrap_or_else(|| self.out.join(".cache")),
+            mode,
+        );
+        let progress = if self.quiet {
+            ProgressMode::None
+        } else {
+            self.progress
+        };
+        let mut r = Runner::new(cache, Events::new(progress), self.shard);
+        r.require_cached = self.require_cached;
+        r
+    }
 }
 
 pub fn run(a: BakeArgs) -> anyhow::Result<()> {
@@ -108,25 +155,41 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(a.threads.unwrap_or(0))
         .build()?;
-    for (path, spec) in a.specs.iter().zip(&specs) {
-        match spec {
-            Loaded::Skin(s) => {
-                let has =
-                    a.entries.is_empty() || s.entries.iter().any(|e| a.entries.contains(&e.name));
-                if has {
-                    bake_spec(&a, path, s)?
+    interrupt::install();
+    interrupt::set_silent(!a.human());
+    let runner = a.runner();
+    let t0 = Instant::now();
+    let mut stems = Vec::new();
+    let result = (|| -> anyhow::Result<()> {
+        for (path, spec) in a.specs.iter().zip(&specs) {
+            stems.push(spec_stem(path));
+            match spec {
+                Loaded::Skin(s) => {
+                    let has = a.entries.is_empty()
+                        || s.entries.iter().any(|e| a.entries.contains(&e.name));
+                    if has {
+                        pool.install(|| bake_spec(&a, path, s, &runner))?
+                    }
                 }
-            }
-            Loaded::Fiber(s) => {
-                let has =
-                    a.entries.is_empty() || s.fibers.iter().any(|e| a.entries.contains(&e.name));
-                if has {
-                    pool.install(|| super::bake_fiber::bake_fiber_spec(&a, path, s))?
+                Loaded::Fiber(s) => {
+                    let has = a.entries.is_empty()
+                        || s.fibers.iter().any(|e| a.entries.contains(&e.name));
+                    if has {
+                        pool.install(|| super::bake_fiber::bake_fiber_spec(&a, path, s, &runner))?
+                    }
                 }
             }
         }
-    }
-    Ok(())
+        Ok(())
+    })();
+    super::pipeline::finish(&a, &runner, &stems, t0, result)
+}
+
+/// The output directory name of a spec: its file stem.
+pub fn spec_stem(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "spec".into())
 }
 
 /// A spec of either kind.
@@ -136,18 +199,20 @@ enum Loaded {
 }
 
 fn say(a: &BakeArgs, msg: impl AsRef<str>) {
-    if !a.quiet {
+    if a.human() {
         eprintln!("{}", msg.as_ref());
     }
 }
 
-fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
+fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or_else(|| "spec".into());
+    let stem = spec_stem(path);
     let dir = a.out.join(&stem);
+    runner
+        .events
+        .emit(serde_json::json!({"event": "bake_started", "spec": path,
+        "kind": "skin", "entries": spec.entries.iter()
+            .filter(|e| a.entries.is_empty() || a.entries.contains(&e.name)).count()}));
     let selected: Vec<&crate::spec::ResolvedEntry> = spec
         .entries
         .iter()
@@ -163,18 +228,22 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
     let lam = spec.wavelengths.lambda_nm();
-    for e in &entries {
+    // A shard only computes work units; `baker merge` writes every product.
+    let sharded = a.shard.is_some();
+    for e in entries.iter().filter(|_| !sharded) {
         let p = dir.join("optics").join(format!("{}.csv", e.name));
         atomic::write(&p, output::csv::entry_csv(lam, e).as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
     }
-    if a.plots {
+    if a.plots && !sharded {
         super::optics::write_plots(&dir.join("plots"), lam, &entries)?;
     }
     let doc = output::document::document(&spec.file, lam, entries.clone());
     let p = dir.join("optics.json");
-    atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
-        .with_context(|| format!("writing {}", p.display()))?;
+    if !sharded {
+        atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
     if a.optics_only {
         say(
             a,
@@ -207,7 +276,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         ),
     );
     let terminal = std::io::stderr().is_terminal();
-    let bar = (!a.quiet && terminal).then(|| super::progress::bar(n_sims as u64 * photons, ""));
+    let bar = (a.human() && terminal).then(|| super::progress::bar(n_sims as u64 * photons, ""));
     let sim = SimOptions {
         photons,
         seed: settings.seed,
@@ -216,29 +285,57 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         bar: bar.clone(),
     };
     let t_sim = Instant::now();
-    let spectral = profile::simulate(&entries, lam, &bins, &plan, &sim, |done, total, _| {
-        if let Some(b) = &bar {
-            b.set_message(format!("simulation {done}/{total}"));
-        } else if !a.quiet {
-            // Pipelines (stderr not a terminal) get a line every ~5 % instead of a bar.
-            let step = (total / 20).max(1);
-            if done % step == 0 || done == total {
-                let el = t_sim.elapsed().as_secs_f64();
-                let eta = el / done as f64 * (total - done) as f64;
-                eprintln!("  simulation {done}/{total}, {el:.0} s elapsed, eta {eta:.0} s");
+    let prefix = format!("{stem}/skin");
+    let spectral = profile::simulate_units(
+        &entries,
+        lam,
+        &bins,
+        &plan,
+        &sim,
+        runner,
+        &prefix,
+        |done, total, _| {
+            if let Some(b) = &bar {
+                b.set_message(format!("simulation {done}/{total}"));
+            } else if a.human() {
+                // Pipelines (stderr not a terminal) get a line every ~5 % instead of a bar.
+                let step = (total / 20).max(1);
+                if done % step == 0 || done == total {
+                    let el = t_sim.elapsed().as_secs_f64();
+                    let eta = el / done as f64 * (total - done) as f64;
+                    eprintln!("  simulation {done}/{total}, {el:.0} s elapsed, eta {eta:.0} s");
+                }
             }
-        }
-    })?;
+        },
+    )?;
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
+    let Some(spectral) = spectral.filter(|_| !sharded) else {
+        // A shard: its units are cached; `baker merge` assembles.
+        return Ok(());
+    };
     let sim_seconds = t_sim.elapsed().as_secs_f64();
     let colour = ColourMap::new(lam);
     let t_fit = Instant::now();
+    // The fits are units too (minutes for a large database): keyed by the spectral profile.
     let rgb: Vec<RgbProfile> = spectral
         .par_iter()
-        .map(|p| profile::rgb_profile(p, &colour, settings.gaussians))
-        .collect();
+        .zip(&entries)
+        .map(|(p, e)| {
+            let key = crate::pipeline::KeyBuilder::new("skin-fit")
+                .part("profile", p)
+                .part("gaussians", &settings.gaussians)
+                .finish();
+            let id = format!("{stem}/fit/{}", e.name);
+            runner
+                .unit(&id, key, None, 0, || {
+                    Ok(profile::rgb_profile(p, &colour, settings.gaussians))
+                })
+                .map_err(anyhow::Error::from)
+                .map(|r| r.expect("fit units are never sharded"))
+        })
+        .collect::<anyhow::Result<_>>()?;
     let fit_seconds = t_fit.elapsed().as_secs_f64();
 
     let mut warnings = Vec::new();
@@ -392,7 +489,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec) -> anyhow::Result<()> {
         serde_json::to_string_pretty(&m)?.as_bytes(),
     )?;
 
-    if !a.quiet {
+    if a.human() {
         summary(
             path,
             &dir,
@@ -541,4 +638,83 @@ pub fn max_relative_se(edges_mm: &[f64], r: &RgbProfile, c: usize, r_max_mm: f64
         .filter(|&i| 0.5 * (edges_mm[i] + edges_mm[i + 1]) <= limit)
         .map(|i| r.rd_rgb_per_mm2_se[i][c] / r.rd_rgb_per_mm2[i][c].abs())
         .fold(0.0f64, f64::max)
+}
+
+/// `baker plan`: the work units of one spec (as `baker bake` with the same flags would run
+/// them), with whether each is in `cache`.
+pub fn plan_units(
+    path: &Path,
+    entries: &[String],
+    photons: Option<u64>,
+    no_reuse: bool,
+    cache: &Cache,
+) -> anyhow::Result<Vec<crate::pipeline::UnitInfo>> {
+    let stem = spec_stem(path);
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let pick = |name: &str| entries.is_empty() || entries.iter().any(|e| e == name);
+    let mut out = Vec::new();
+    if crate::spec::fiber::is_fiber_spec(&text) {
+        let spec = crate::spec::fiber::load(path)
+            .map_err(|e| UsageError(e.to_string().trim_end().to_string()))?;
+        let mut st = spec.bake.clone();
+        if let Some(p) = photons {
+            st.photons = p;
+        }
+        let mut index = 0;
+        for e in spec.fibers.iter().filter(|e| pick(&e.name)) {
+            out.extend(super::bake_fiber::plan_entry(
+                &spec, &stem, e, &st, cache, &mut index,
+            )?);
+        }
+        return Ok(out);
+    }
+    let spec = load_spec(path)?;
+    let optics = spec
+        .entries
+        .iter()
+        .filter(|e| pick(&e.name))
+        .map(|e| {
+            let o = crate::skin::evaluate(&e.params, &spec.wavelengths).map_err(|err| {
+                UsageError(format!("{}:{}: entry {}: {err}", spec.file, e.line, e.name))
+            })?;
+            Ok(output::document::entry(e, &o))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let lam = spec.wavelengths.lambda_nm();
+    let s = &spec.profiles;
+    let bins = RadialBins::fine_then_log(s.dr_min_mm, s.growth, s.r_max_mm);
+    let plan = profile::plan(&optics, lam.len(), !no_reuse);
+    let sim = SimOptions {
+        photons: photons.unwrap_or(s.photons),
+        seed: s.seed,
+        threads: None,
+        max_boost: s.max_photon_boost,
+        bar: None,
+    };
+    let units = profile::skin_units(&optics, lam, &bins, &plan, &sim);
+    let nl = lam.len();
+    for g in 0..plan.groups.len() {
+        for (i, l) in lam.iter().enumerate() {
+            if let Some(k) = units.pilot.get(g).and_then(|p| p.get(i)) {
+                out.push(crate::pipeline::UnitInfo {
+                    id: format!("{stem}/skin/pilot/group{g}/{l}nm"),
+                    key: k.hex(),
+                    index: None,
+                    photons: (sim.photons / 100).clamp(2_000, 20_000).min(sim.photons),
+                    cached: cache.path(k).exists(),
+                });
+            }
+        }
+        for (i, l) in lam.iter().enumerate() {
+            let k = &units.run[g][i];
+            out.push(crate::pipeline::UnitInfo {
+                id: format!("{stem}/skin/group{g}/{l}nm"),
+                key: k.hex(),
+                index: Some(g * nl + i),
+                photons: sim.photons,
+                cached: cache.path(k).exists(),
+            });
+        }
+    }
+    Ok(out)
 }

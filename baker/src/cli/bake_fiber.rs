@@ -26,6 +26,7 @@ use crate::fiber::sweep::{Channels, Variant};
 use crate::fiber::symmetry::{self, Symmetry};
 use crate::fiber::{AngularGrid, Fiber};
 use crate::output::{atomic, exr, hdf5 as h5out, manifest, slice};
+use crate::pipeline::{KeyBuilder, Runner};
 use crate::spec::fiber::{FiberEntry, FiberSpec, SymmetryMode};
 use crate::spectral::ColourMap;
 use formats::bcsdf::{self, Bcsdf, Directory, Writer, KIND};
@@ -43,7 +44,10 @@ pub struct EntryReport {
     pub split: u32,
     pub variants: Vec<String>,
     pub channels: Vec<String>,
+    /// Wall-clock figures: in `timing.json`, not the (reproducible) manifest.
+    #[serde(skip)]
     pub seconds: f64,
+    #[serde(skip)]
     pub photons_per_s: f64,
     /// Mean over stored directions of each slice's median / 90th-percentile per-bin relative
     /// standard error (section 0).
@@ -56,27 +60,47 @@ pub struct EntryReport {
 }
 
 /// Bakes every selected entry of a fiber spec.
-pub fn bake_fiber_spec(a: &BakeArgs, path: &Path, spec: &FiberSpec) -> anyhow::Result<()> {
+pub fn bake_fiber_spec(
+    a: &BakeArgs,
+    path: &Path,
+    spec: &FiberSpec,
+    runner: &Runner,
+) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or_else(|| "fibers".into());
+    let stem = super::bake::spec_stem(path);
     let dir = a.out.join(&stem);
+    runner
+        .events
+        .emit(serde_json::json!({"event": "bake_started", "spec": path,
+        "kind": "fiber", "entries": spec.fibers.iter()
+            .filter(|e| a.entries.is_empty() || a.entries.contains(&e.name)).count()}));
     let mut settings = spec.bake.clone();
     if let Some(p) = a.photons {
         settings.photons = p;
     }
     let mut reports = Vec::new();
     let mut files = Vec::new();
+    let mut timing = Vec::new();
+    // Work units are numbered across the spec's entries (sharding uses the number).
+    let mut unit_index = 0usize;
     for e in spec
         .fibers
         .iter()
         .filter(|e| a.entries.is_empty() || a.entries.contains(&e.name))
     {
-        let (r, f) = bake_entry(a, &dir, spec, e, &settings)?;
-        reports.push(r);
-        files.extend(f);
+        let ctx = UnitCtx {
+            runner,
+            prefix: format!("{stem}/{}", e.name),
+        };
+        if let Some((r, f)) = bake_entry(a, &dir, spec, e, &settings, &ctx, &mut unit_index)? {
+            timing.push(serde_json::json!({"entry": r.name, "seconds": r.seconds,
+                "photons_per_s": r.photons_per_s}));
+            reports.push(r);
+            files.extend(f);
+        }
+    }
+    if a.shard.is_some() {
+        return Ok(());
     }
     let mut mfiles = Vec::new();
     for (rel, desc) in &files {
@@ -88,12 +112,18 @@ pub fn bake_fiber_spec(a: &BakeArgs, path: &Path, spec: &FiberSpec) -> anyhow::R
         "settings": settings,
         "entries": reports,
         "files": mfiles,
-        "seconds": t0.elapsed().as_secs_f64(),
     });
     let p = dir.join("manifest.json");
     atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
         .with_context(|| format!("writing {}", p.display()))?;
-    if !a.quiet {
+    // Wall-clock figures change from run to run (and a cached unit costs nothing): they live
+    // apart from the manifest, which is byte-identical for the same spec and flags.
+    let p = dir.join("timing.json");
+    let doc = serde_json::json!({"seconds": t0.elapsed().as_secs_f64(), "entries": timing,
+        "note": "this run's wall-clock time; units taken from the cache cost nothing"});
+    atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
+        .with_context(|| format!("writing {}", p.display()))?;
+    if a.human() {
         eprintln!(
             "baked {}: {} fibers → {} ({:.1} s)",
             path.display(),
@@ -149,15 +179,26 @@ struct TableOut {
     group: h5::Group,
 }
 
-fn bake_entry(
-    a: &BakeArgs,
-    dir: &Path,
+/// What an entry's units are made of: the grid, the sections, the stored directions, the
+/// channels, and the digest of everything a unit's result depends on besides its directions
+/// (pipeline::KeyBuilder).
+pub struct EntrySetup {
+    pub grid: AngularGrid,
+    pub fibers: Vec<Fiber>,
+    pub sym: Symmetry,
+    pub stored: Vec<usize>,
+    pub map: Vec<u32>,
+    pub variants: Vec<Variant>,
+    pub channels: Channels,
+    pub seed_base: u64,
+    pub key_base: [u8; 32],
+}
+
+pub fn entry_setup(
     spec: &FiberSpec,
     e: &FiberEntry,
     st: &BakeSettings,
-) -> anyhow::Result<(EntryReport, Vec<(String, String)>)> {
-    let t0 = Instant::now();
-    let spec_sha = crate::output::manifest::spec_sha256(&spec.file);
+) -> anyhow::Result<EntrySetup> {
     let grid = AngularGrid::new(st.res_deg).map_err(anyhow::Error::msg)?;
     let fibers: Vec<Fiber> = (0..e.sections)
         .map(|s| e.section_variant(s).map(|sec| e.fiber_with(sec)))
@@ -172,6 +213,141 @@ fn bake_entry(
         st.channels,
         typical_path_um(&fibers[0]),
     );
+    let seed_base = name_hash(&e.name);
+    let key_base =
+        crate::pipeline::digest_of(&(&fibers, &channels, st, seed_base, grid.n_theta, grid.n_phi));
+    Ok(EntrySetup {
+        grid,
+        fibers,
+        sym,
+        stored,
+        map,
+        variants,
+        channels,
+        seed_base,
+        key_base,
+    })
+}
+
+/// `baker plan`: the entry's units, numbered from `*unit_index`.
+pub fn plan_entry(
+    spec: &FiberSpec,
+    stem: &str,
+    e: &FiberEntry,
+    st: &BakeSettings,
+    cache: &crate::pipeline::Cache,
+    unit_index: &mut usize,
+) -> anyhow::Result<Vec<crate::pipeline::UnitInfo>> {
+    let setup = entry_setup(spec, e, st)?;
+    let n_wi = setup.stored.len();
+    let all: Vec<usize> = (0..n_wi).collect();
+    let mut out = Vec::new();
+    for chunk in all.chunks(unit_len(n_wi)) {
+        let bins: Vec<usize> = chunk.iter().map(|&i| setup.stored[i]).collect();
+        let key = KeyBuilder::new("fiber-slices")
+            .digest("entry", &setup.key_base)
+            .part("bins", &bins)
+            .finish();
+        out.push(crate::pipeline::UnitInfo {
+            id: format!(
+                "{stem}/{}/wi{}-{}",
+                e.name,
+                chunk[0],
+                chunk[chunk.len() - 1]
+            ),
+            key: key.hex(),
+            index: Some(*unit_index),
+            photons: (chunk.len() * setup.fibers.len()) as u64 * st.photons,
+            cached: cache.path(&key).exists(),
+        });
+        *unit_index += 1;
+    }
+    Ok(out)
+}
+
+/// An entry's report and its files (path relative to the spec's output, description).
+type EntryOutputs = (EntryReport, Vec<(String, String)>);
+
+/// What an entry bake needs to run its work units.
+struct UnitCtx<'a> {
+    runner: &'a Runner,
+    prefix: String,
+}
+
+/// Stored incoming directions per work unit: a function of their number only, so the units
+/// (and shards) do not depend on the machine.
+pub fn unit_len(n_wi: usize) -> usize {
+    n_wi.div_ceil(48).max(4)
+}
+
+/// The results of one unit (stored directions `chunk`, every section), from the cache or
+/// traced; `None` if another shard owns it.
+#[allow(clippy::too_many_arguments)]
+fn unit_results(
+    ctx: &UnitCtx,
+    index: usize,
+    chunk: &[usize],
+    stored: &[usize],
+    key_base: &[u8; 32],
+    fibers: &[Fiber],
+    grid: &AngularGrid,
+    channels: &Channels,
+    st: &BakeSettings,
+    seed_base: u64,
+    bar: Option<&indicatif::ProgressBar>,
+) -> anyhow::Result<Option<Vec<Vec<bake::SliceResult>>>> {
+    let bins: Vec<usize> = chunk.iter().map(|&i| stored[i]).collect();
+    let key = KeyBuilder::new("fiber-slices")
+        .digest("entry", key_base)
+        .part("bins", &bins)
+        .finish();
+    let id = format!("{}/wi{}-{}", ctx.prefix, chunk[0], chunk[chunk.len() - 1]);
+    let photons = (chunk.len() * fibers.len()) as u64 * st.photons;
+    let r = ctx.runner.unit(&id, key, Some(index), photons, || {
+        Ok(chunk
+            .par_iter()
+            .map(|&i| {
+                let b = stored[i];
+                let inc = incident_of_bin(grid, b / grid.n_phi, b % grid.n_phi);
+                (0..fibers.len())
+                    .map(|s| {
+                        let seed = task_seed(st.seed, &[seed_base, s as u64, b as u64]);
+                        let r = bake::trace_slice(&fibers[s], inc, grid, channels, st, seed);
+                        if let Some(bar) = bar {
+                            bar.inc(1);
+                        }
+                        r
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect::<Vec<_>>())
+    })?;
+    Ok(r)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn bake_entry(
+    a: &BakeArgs,
+    dir: &Path,
+    spec: &FiberSpec,
+    e: &FiberEntry,
+    st: &BakeSettings,
+    ctx: &UnitCtx,
+    unit_index: &mut usize,
+) -> anyhow::Result<Option<EntryOutputs>> {
+    let t0 = Instant::now();
+    let spec_sha = crate::output::manifest::spec_sha256(&spec.file);
+    let EntrySetup {
+        grid,
+        fibers,
+        sym,
+        stored,
+        map,
+        variants,
+        channels,
+        seed_base,
+        key_base,
+    } = entry_setup(spec, e, st)?;
     let (nv, nc) = (variants.len(), channels.per_variant());
     let ns = fibers.len();
     let n_tables = if ns > 1 { ns + 1 } else { ns };
@@ -179,7 +355,7 @@ fn bake_entry(
         .map(|s| format!("section-{s:02}"))
         .chain((ns > 1).then(|| "average".to_string()))
         .collect();
-    if !a.quiet {
+    if a.human() {
         eprintln!(
             "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons (split {}), {} variant(s) × {} channel(s)",
             e.name,
@@ -224,7 +400,29 @@ fn bake_entry(
     let mut albedo_range = (f64::INFINITY, f64::NEG_INFINITY);
     let bins = grid.bins();
     let n_wi = stored.len();
-    let seed_base = name_hash(&e.name);
+    let ulen = unit_len(n_wi);
+    let first_unit = *unit_index;
+    *unit_index += n_wi.div_ceil(ulen);
+    let all: Vec<usize> = (0..n_wi).collect();
+    if a.shard.is_some() {
+        // A shard traces its units into the cache; `baker merge` writes the tables.
+        for (u, chunk) in all.chunks(ulen).enumerate() {
+            unit_results(
+                ctx,
+                first_unit + u,
+                chunk,
+                &stored,
+                &key_base,
+                &fibers,
+                &grid,
+                &channels,
+                st,
+                seed_base,
+                None,
+            )?;
+        }
+        return Ok(None);
+    }
 
     let mut tables: Vec<Option<(String, Vec<u8>)>> = vec![None; n_tables];
     let bcsdf_bytes = std::cell::Cell::new(0u64);
@@ -321,29 +519,19 @@ fn bake_entry(
         }
 
         let terminal = std::io::stderr().is_terminal();
-        let bar = (!a.quiet && terminal)
+        let bar = (a.human() && terminal)
             .then(|| super::progress::bar((n_wi * ns) as u64, &e.name));
-        let group = (2 * rayon::current_num_threads()).max(4);
         let mut done = 0usize;
         let t_trace = Instant::now();
-        for chunk in (0..n_wi).collect::<Vec<_>>().chunks(group) {
-            let results: Vec<Vec<bake::SliceResult>> = chunk
-                .par_iter()
-                .map(|&i| {
-                    let b = stored[i];
-                    let inc = incident_of_bin(&grid, b / grid.n_phi, b % grid.n_phi);
-                    (0..ns)
-                        .map(|s| {
-                            let seed = task_seed(st.seed, &[seed_base, s as u64, b as u64]);
-                            let r = bake::trace_slice(&fibers[s], inc, &grid, &channels, st, seed);
-                            if let Some(bar) = &bar {
-                                bar.inc(1);
-                            }
-                            r
-                        })
-                        .collect()
-                })
-                .collect();
+        for (u, chunk) in all.chunks(ulen).enumerate() {
+            let results = unit_results(
+                ctx, first_unit + u, chunk, &stored, &key_base, &fibers, &grid, &channels, st,
+                seed_base, bar.as_ref(),
+            )?
+            .ok_or_else(|| anyhow::anyhow!("unit {} of {} is not available", u, e.name))?;
+            if let Some(bar) = &bar {
+                bar.set_position(((done + chunk.len()) * ns) as u64);
+            }
             for (&i, res) in chunk.iter().zip(results) {
                 let b = stored[i];
                 let phi_i = (-180.0 + (b % grid.n_phi) as f64 * st.res_deg + 0.5 * st.res_deg)
@@ -398,7 +586,7 @@ fn bake_entry(
                 }
             }
             done += chunk.len();
-            if bar.is_none() && !a.quiet {
+            if bar.is_none() && a.human() {
                 let step = (n_wi / 10).max(1);
                 if done % step < chunk.len() || done == n_wi {
                     let el = t_trace.elapsed().as_secs_f64();
@@ -529,7 +717,7 @@ fn bake_entry(
         bcsdf_bytes: bcsdf_bytes.get(),
         hdf5_bytes,
     };
-    if !a.quiet {
+    if a.human() {
         eprintln!(
             "  {}: {:.1} s, {:.2} M photons/s, noise median {:.2} % / p90 {:.2} %, .bcsdf {:.2} MB, .h5 {:.2} MB",
             e.name,
@@ -541,7 +729,7 @@ fn bake_entry(
             hdf5_bytes as f64 / 1e6
         );
     }
-    Ok((report, files))
+    Ok(Some((report, files)))
 }
 
 /// θi of the preview rows and φi (fiber rotations) of its columns, degrees.

@@ -23,7 +23,9 @@ mod export;
 mod fiber;
 mod mc;
 mod optics;
+pub mod pipeline;
 mod progress;
+mod slurm;
 
 use std::path::PathBuf;
 
@@ -69,6 +71,16 @@ pub enum Command {
     /// Convert a baked table to the parameters a renderer takes: Burley/OpenPBR/MaterialX,
     /// Blender, Unreal, Unity, pbrt-v4, Mitsuba 3 (skin); Chiang hair (fibers).
     Export(export::ExportArgs),
+    /// Combine shard directories (`baker bake --shard I/N`) into the tables one bake would
+    /// write, byte for byte.
+    Merge(pipeline::MergeArgs),
+    /// List the work units of specs, their cost and whether they are cached.
+    Plan(pipeline::PlanArgs),
+    /// Bake on a Slurm cluster: an array job of shards and a dependent merge job.
+    Slurm(slurm::SlurmArgs),
+    /// Manage the work-unit cache.
+    #[command(subcommand)]
+    Cache(pipeline::CacheCommand),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -129,6 +141,10 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bench(a) => bench::run(a),
         Command::Fiber(c) => fiber::run(c),
         Command::Export(a) => export::run(a),
+        Command::Merge(m) => pipeline::merge(m),
+        Command::Plan(p) => pipeline::plan(p),
+        Command::Cache(c) => pipeline::cache(c),
+        Command::Slurm(a) => slurm::run(a),
     }
 }
 

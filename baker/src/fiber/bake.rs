@@ -65,7 +65,7 @@ impl Default for BakeSettings {
 
 /// Noise of a slice: relative standard error of the sampling density per bin, over bins
 /// whose density exceeds 1 % of the slice's maximum.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Noise {
     pub median_rel_se: f64,
     pub p90_rel_se: f64,
@@ -73,7 +73,7 @@ pub struct Noise {
 }
 
 /// One traced incoming bin.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct SliceResult {
     /// Fractions of the intercepted power per channel and bin, `[channel][θo][Δφ]`.
     pub fraction: Vec<f64>,

@@ -120,6 +120,9 @@ pub const DOS_RANGE: (f64, f64) = (0.001, 0.04);
 
 const PRESETS_CSV: &str = include_str!("data/dye_presets.csv");
 
+/// The data tables of this module compiled into the binary (for the unit cache keys).
+pub const DATA_FILES: &[(&str, &str)] = &[("dye_presets.csv", PRESETS_CSV)];
+
 /// The shipped dye presets (`data/dye_presets.csv`, sources in its header).
 pub fn presets() -> Vec<Dye> {
     let mut sources: Vec<(String, String)> = Vec::new();

@@ -43,7 +43,7 @@ impl Default for FitOptions {
     }
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GaussianFit {
     /// Ascending variances, mm².
     pub variance_mm2: Vec<f64>,

@@ -9,4 +9,6 @@ pub mod rgb;
 pub mod simulate;
 
 pub use rgb::{rgb_profile, RgbProfile};
-pub use simulate::{plan, simulate, Plan, SimOptions, SpectralProfile};
+pub use simulate::{
+    plan, simulate, simulate_units, skin_units, Plan, SimOptions, SkinUnits, SpectralProfile,
+};

@@ -5,7 +5,7 @@ use crate::fit::{fit_sum_of_gaussians, FitOptions, GaussianFit};
 use crate::spectral::ColourMap;
 
 /// What a renderer loads for one entry.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RgbProfile {
     /// CIE XYZ of the total diffuse reflectance (Y = 1 for a white diffuser).
     pub xyz: [f64; 3],

@@ -9,6 +9,8 @@ use std::time::Instant;
 
 use formats::OpticsEntry;
 
+use crate::pipeline::{Cache, CacheMode, Events, Key, KeyBuilder, ProgressMode, Runner};
+use crate::transport::white::WhiteSets;
 use crate::transport::{self, run_white_sets, McOptions, RadialBins, Stack};
 
 /// Spectral profile of one entry: per wavelength, Rd(r) per unit area on the radial bins and
@@ -139,17 +141,128 @@ pub fn task_seed(seed: u64, d: u64, i: usize) -> u64 {
 }
 
 /// Runs every group of `plan` at every wavelength; `on_task(done, total, seconds)` after each.
+/// No cache (see [`simulate_units`] for the bake's cached, shardable version).
 pub fn simulate(
     entries: &[OpticsEntry],
     lambda_nm: &[f64],
     bins: &RadialBins,
     plan: &Plan,
     o: &SimOptions,
-    mut on_task: impl FnMut(usize, usize, f64),
+    on_task: impl FnMut(usize, usize, f64),
 ) -> anyhow::Result<Vec<SpectralProfile>> {
+    let runner = Runner::new(
+        Cache::new("", CacheMode::Off),
+        Events::new(ProgressMode::None),
+        None,
+    );
+    let out = simulate_units(entries, lambda_nm, bins, plan, o, &runner, "", on_task)?;
+    Ok(out.expect("without a shard every unit is computed"))
+}
+
+/// The work units of a skin bake: per group and wavelength a pilot run (photon counts, only
+/// with `max_boost > 1`; not sharded) and the main run (sharded by its index g·nλ + i).
+pub struct SkinUnits {
+    pub pilot: Vec<Vec<Key>>,
+    pub run: Vec<Vec<Key>>,
+    pilot_photons: u64,
+}
+
+fn stack_and_sets(
+    entries: &[OpticsEntry],
+    plan: &Plan,
+    g: usize,
+    i: usize,
+) -> (Stack, Vec<Vec<f64>>) {
+    let members = &plan.groups[g];
+    let stack: Stack = transport::stack::from_skin(&entries[members[0]], i);
+    let sets: Vec<Vec<f64>> = members
+        .iter()
+        .map(|&m| entries[m].layers.iter().map(|l| l.mua_per_mm[i]).collect())
+        .collect();
+    (stack, sets)
+}
+
+/// The units' keys: everything that determines each result (pipeline::KeyBuilder).
+pub fn skin_units(
+    entries: &[OpticsEntry],
+    lambda_nm: &[f64],
+    bins: &RadialBins,
+    plan: &Plan,
+    o: &SimOptions,
+) -> SkinUnits {
+    let nl = lambda_nm.len();
+    let pilot_photons = (o.photons / 100).clamp(2_000, 20_000).min(o.photons);
+    let batch = McOptions::new(1, 0).batch_size;
+    let mut pilot = Vec::new();
+    let mut run = Vec::new();
+    for g in 0..plan.groups.len() {
+        let mut pk = Vec::new();
+        let mut rk = Vec::new();
+        let inputs: Vec<(Stack, Vec<Vec<f64>>)> = (0..nl)
+            .map(|i| stack_and_sets(entries, plan, g, i))
+            .collect();
+        if o.max_boost > 1 {
+            for (i, (stack, sets)) in inputs.iter().enumerate() {
+                pk.push(
+                    KeyBuilder::new("skin-pilot")
+                        .part("stack", stack)
+                        .part("sets", sets)
+                        .part("photons", &pilot_photons)
+                        .part("seed", &task_seed(o.seed ^ PILOT_TAG, plan.digests[g], i))
+                        .part("batch", &batch)
+                        .part("random_entry", &true)
+                        .finish(),
+                );
+            }
+        }
+        let pilots = crate::pipeline::digest_of(&pk);
+        for (i, (stack, sets)) in inputs.iter().enumerate() {
+            rk.push(
+                KeyBuilder::new("skin-run")
+                    .part("stack", stack)
+                    .part("sets", sets)
+                    .part("r_edges_mm", &bins.edges_mm())
+                    .part("photons", &o.photons)
+                    .part("max_boost", &o.max_boost)
+                    .digest("pilots", &pilots)
+                    .part("seed", &task_seed(o.seed, plan.digests[g], i))
+                    .part("batch", &batch)
+                    .part("random_entry", &true)
+                    .finish(),
+            );
+        }
+        pilot.push(pk);
+        run.push(rk);
+    }
+    SkinUnits {
+        pilot,
+        run,
+        pilot_photons,
+    }
+}
+
+/// Unit id: `<prefix>/group<g>/<λ>nm` (pilots: `<prefix>/pilot/group<g>/<λ>nm`).
+fn unit_id(prefix: &str, kind: &str, g: usize, lambda_nm: f64) -> String {
+    format!("{prefix}/{kind}group{g}/{lambda_nm}nm")
+}
+
+/// [`simulate`] through a [`Runner`]: cached units are read, owned units computed and cached,
+/// units of other shards skipped. `Ok(None)` when some units belong to other shards.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_units(
+    entries: &[OpticsEntry],
+    lambda_nm: &[f64],
+    bins: &RadialBins,
+    plan: &Plan,
+    o: &SimOptions,
+    runner: &Runner,
+    prefix: &str,
+    mut on_task: impl FnMut(usize, usize, f64),
+) -> anyhow::Result<Option<Vec<SpectralProfile>>> {
     let nl = lambda_nm.len();
     let nr = bins.len();
     let areas = bins.areas_mm2();
+    let units = skin_units(entries, lambda_nm, bins, plan, o);
     let mut out: Vec<SpectralProfile> = entries
         .iter()
         .map(|_| SpectralProfile {
@@ -167,38 +280,47 @@ pub fn simulate(
             group: 0,
         })
         .collect();
-    let task = |g: usize, i: usize| {
-        let members = &plan.groups[g];
-        let stack: Stack = transport::stack::from_skin(&entries[members[0]], i);
-        let sets: Vec<Vec<f64>> = members
-            .iter()
-            .map(|&m| entries[m].layers.iter().map(|l| l.mua_per_mm[i]).collect())
-            .collect();
-        (stack, sets)
-    };
-    let photons = photon_counts(entries, lambda_nm, plan, o, &task)?;
-    if let Some(b) = &o.bar {
-        b.set_length(photons.iter().flatten().sum());
-    }
     let total = plan.groups.len() * nl;
     let mut done = 0;
+    let mut complete = true;
     for (g, members) in plan.groups.iter().enumerate() {
+        // Photon counts of the group: only needed if this process runs one of its units.
+        let mut photons: Option<Vec<u64>> = None;
         for i in 0..nl {
             let t0 = Instant::now();
-            let (stack, sets) = task(g, i);
-            let mut mo = McOptions::new(photons[g][i], task_seed(o.seed, plan.digests[g], i));
-            mo.threads = o.threads;
-            mo.bar = o.bar.clone();
-            // The profile a renderer applies everywhere: averaged over where the beam meets
-            // the junction's papillae (profile/DECISIONS.md, row 1).
-            mo.random_entry = true;
-            let run = run_white_sets(&stack, &sets, bins, &mo).map_err(|err| {
-                anyhow::anyhow!(
-                    "entry {} at {} nm: {err}",
-                    entries[members[0]].name,
-                    lambda_nm[i]
-                )
+            let index = g * nl + i;
+            let key = units.run[g][i];
+            let id = unit_id(prefix, "", g, lambda_nm[i]);
+            let needs_compute = runner.cache.load::<WhiteSets>(&key).is_none()
+                && runner.owns(Some(index))
+                && !runner.require_cached;
+            if needs_compute && photons.is_none() {
+                photons = Some(photon_counts(
+                    entries, lambda_nm, plan, o, &units, runner, prefix, g,
+                )?);
+            }
+            let n_main = photons.as_ref().map_or(o.photons, |p| p[i]);
+            let run = runner.unit(&id, key, Some(index), n_main, || {
+                let (stack, sets) = stack_and_sets(entries, plan, g, i);
+                let mut mo = McOptions::new(n_main, task_seed(o.seed, plan.digests[g], i));
+                mo.threads = o.threads;
+                mo.bar = o.bar.clone();
+                // The profile a renderer applies everywhere: averaged over where the beam
+                // meets the junction's papillae (profile/DECISIONS.md, row 1).
+                mo.random_entry = true;
+                run_white_sets(&stack, &sets, bins, &mo).map_err(|err| {
+                    anyhow::anyhow!(
+                        "entry {} at {} nm: {err}",
+                        entries[members[0]].name,
+                        lambda_nm[i]
+                    )
+                })
             })?;
+            done += 1;
+            let Some(run) = run else {
+                complete = false;
+                continue;
+            };
             let n = run.photons;
             for (&m, t) in members.iter().zip(&run.sets) {
                 let p = &mut out[m];
@@ -215,58 +337,59 @@ pub fn simulate(
                     p.rd_per_mm2_se[i][k] = t.rd_r[k].se(n) / areas[k];
                 }
             }
-            done += 1;
             on_task(done, total, t0.elapsed().as_secs_f64());
         }
     }
-    Ok(out)
+    Ok(complete.then_some(out))
 }
 
-/// Photons per group and wavelength: `o.photons`, times an integer boost ⌊e_max/e_λ⌋ capped
+/// Photons of group `g` per wavelength: `o.photons`, times an integer boost ⌊e_max/e_λ⌋ capped
 /// at `o.max_boost`, e_λ the scattering events per packet of a short pilot run (deterministic:
 /// seeded like the main runs) and e_max the group's largest. Cheap wavelengths — strongly
 /// absorbed blue light, where dark skin's profiles are noisiest — get more packets for about
 /// the cost of the group's most expensive wavelength.
+#[allow(clippy::too_many_arguments)]
 fn photon_counts(
     entries: &[OpticsEntry],
     lambda_nm: &[f64],
     plan: &Plan,
     o: &SimOptions,
-    task: &dyn Fn(usize, usize) -> (Stack, Vec<Vec<f64>>),
-) -> anyhow::Result<Vec<Vec<u64>>> {
+    units: &SkinUnits,
+    runner: &Runner,
+    prefix: &str,
+    g: usize,
+) -> anyhow::Result<Vec<u64>> {
     let nl = lambda_nm.len();
     if o.max_boost <= 1 {
-        return Ok(vec![vec![o.photons; nl]; plan.groups.len()]);
+        return Ok(vec![o.photons; nl]);
     }
-    let pilot = (o.photons / 100).clamp(2_000, 20_000).min(o.photons);
-    let mut out = Vec::new();
-    for g in 0..plan.groups.len() {
-        let mut events = Vec::with_capacity(nl);
-        for i in 0..nl {
-            let (stack, sets) = task(g, i);
-            let mut mo = McOptions::new(pilot, task_seed(o.seed ^ PILOT_TAG, plan.digests[g], i));
-            mo.threads = o.threads;
-            mo.random_entry = true;
-            let run = run_white_sets(&stack, &sets, &RadialBins::uniform(1.0, 1), &mo).map_err(
-                |err| {
+    let pilot = units.pilot_photons;
+    let mut events = Vec::with_capacity(nl);
+    for i in 0..nl {
+        let id = unit_id(prefix, "pilot/", g, lambda_nm[i]);
+        let run = runner
+            .unit(&id, units.pilot[g][i], None, pilot, || {
+                let (stack, sets) = stack_and_sets(entries, plan, g, i);
+                let mut mo =
+                    McOptions::new(pilot, task_seed(o.seed ^ PILOT_TAG, plan.digests[g], i));
+                mo.threads = o.threads;
+                mo.random_entry = true;
+                run_white_sets(&stack, &sets, &RadialBins::uniform(1.0, 1), &mo).map_err(|err| {
                     anyhow::anyhow!(
                         "entry {} at {} nm: {err}",
                         entries[plan.groups[g][0]].name,
                         lambda_nm[i]
                     )
-                },
-            )?;
-            events.push((run.scattering_events as f64 / run.photons as f64).max(1.0));
-        }
-        let e_max = events.iter().cloned().fold(1.0, f64::max);
-        out.push(
-            events
-                .iter()
-                .map(|e| o.photons * ((e_max / e).floor() as u64).clamp(1, o.max_boost))
-                .collect(),
-        );
+                })
+            })?
+            .expect("pilot units are never sharded");
+        events.push((run.scattering_events as f64 / run.photons as f64).max(1.0));
     }
-    Ok(out)
+    let e_max = events.iter().cloned().fold(1.0, f64::max);
+    Ok(events
+        .iter()
+        .map(|e| o.photons * ((e_max / e).floor() as u64).clamp(1, o.max_boost))
+        .collect())
 }
 
 /// Seeds of the pilot runs differ from those of the main runs.

@@ -8,7 +8,7 @@ use serde::Deserialize;
 
 use super::error::{SpecError, SpecErrors};
 use super::raw::Spanned;
-use super::resolve::{loc, parse_yaml, Ctx};
+use super::resolve::{loc, parse_plain, parse_yaml, Ctx};
 use crate::fiber::bake::BakeSettings;
 use crate::fiber::dye::{self, Band, Dye, DyeClass, Spectrum};
 use crate::fiber::material::{FiberType, TABLE_9, WOOL_SCALE_LENGTH_UM, WOOL_SCALE_TILT_DEG};
@@ -263,7 +263,11 @@ pub fn load(path: &Path) -> Result<FiberSpec, SpecErrors> {
 
 /// Validates fiber-spec text; files it names are looked up relative to `dir`.
 pub fn load_str(file: &str, text: &str, dir: &Path) -> Result<FiberSpec, SpecErrors> {
-    let raw: RawFiberSpec = parse_yaml(file, text)?;
+    let raw: RawFiberSpec = parse_yaml(file, text, &|t| check_str(file, t, dir))?;
+    resolve_raw(file, raw, dir)
+}
+
+fn resolve_raw(file: &str, raw: RawFiberSpec, dir: &Path) -> Result<FiberSpec, SpecErrors> {
     let mut cx = Ctx {
         file: file.to_string(),
         errors: Vec::new(),
@@ -276,6 +280,16 @@ pub fn load_str(file: &str, text: &str, dir: &Path) -> Result<FiberSpec, SpecErr
     }
 }
 
+/// Every error of fiber-spec text, parse errors undiagnosed (to probe what a field allows).
+fn check_str(file: &str, text: &str, dir: &Path) -> Vec<SpecError> {
+    match parse_plain::<RawFiberSpec>(file, text) {
+        Ok(raw) => resolve_raw(file, raw, dir)
+            .err()
+            .map_or_else(Vec::new, |e| e.0),
+        Err(e) => vec![e],
+    }
+}
+
 impl Ctx {
     fn fiber_spec(&mut self, raw: RawFiberSpec, dir: &Path) -> FiberSpec {
         if let Some(v) = &raw.version {
@@ -284,22 +298,27 @@ impl Ctx {
             }
         }
         let mut dyes = dye::presets();
+        // Dyes of the spec that failed their checks: already reported, so a fiber naming one
+        // is not told the name is unknown.
+        let mut broken: Vec<String> = Vec::new();
         for d in &raw.dyes {
-            if let Some(dy) = self.dye(&d.value, dir) {
-                if dyes.iter().any(|x| x.name == dy.name) {
-                    self.invalid(
-                        loc(&d.value.name),
-                        "dyes.name",
-                        format!("{:?} is already defined (presets included)", dy.name),
-                    );
-                } else {
-                    dyes.push(dy);
-                }
+            let Some(dy) = self.dye(&d.value, dir) else {
+                broken.push(d.value.name.value.clone());
+                continue;
+            };
+            if dyes.iter().any(|x| x.name == dy.name) {
+                self.invalid(
+                    loc(&d.value.name),
+                    "dyes.name",
+                    format!("{:?} is already defined (presets included)", dy.name),
+                );
+            } else {
+                dyes.push(dy);
             }
         }
         let mut fibers: Vec<FiberEntry> = Vec::new();
         for f in &raw.fibers {
-            if let Some(e) = self.fiber(f, &dyes, dir) {
+            if let Some(e) = self.fiber(f, &dyes, &broken, dir) {
                 if let Some(first) = fibers.iter().find(|x| x.name == e.name) {
                     self.invalid(
                         loc(&f.value.name),
@@ -374,12 +393,24 @@ impl Ctx {
                 .unwrap_or(d.precision),
             None => d.precision,
         };
-        let keep_bits = self.count(
-            "bake.keep_bits",
-            &b.keep_bits,
-            precision.mantissa_bits() as f64,
-            precision.mantissa_bits() as u64,
-        ) as u32;
+        let bits = precision.mantissa_bits();
+        let keep_bits = match &b.keep_bits {
+            Some(k) if k.value.fract() != 0.0 || !(0.0..=bits as f64).contains(&k.value) => {
+                let name = match precision {
+                    Precision::F16 => "f16",
+                    Precision::F32 => "f32",
+                };
+                self.out_of_range(
+                    loc(k),
+                    "bake.keep_bits",
+                    k.value.to_string(),
+                    format!("a whole number in [0, {bits}] ({name} has {bits} mantissa bits)"),
+                );
+                bits
+            }
+            Some(k) => k.value as u32,
+            None => bits,
+        };
         let channels = match &b.channels {
             Some(c) => self
                 .choice(
@@ -404,8 +435,13 @@ impl Ctx {
                         let n = ((e - a) / st + 1e-9).floor() as usize + 1;
                         (0..n).map(|i| a + st * i as f64).collect()
                     }
-                    (Some(_), Some(_), Some(_)) => {
-                        self.invalid(loc(l), "bake.lambda_nm", "`end` must not be below `start`");
+                    (Some(a), Some(e), Some(_)) => {
+                        self.out_of_range(
+                            loc(&r.end),
+                            "bake.lambda_nm.end",
+                            e.to_string(),
+                            format!("[{a}, 830] (not below start = {a})"),
+                        );
                         d.lambda_nm.clone()
                     }
                     _ => d.lambda_nm.clone(),
@@ -454,7 +490,12 @@ impl Ctx {
                 }
                 Spectrum::Bands(bands)
             }
-            (None, Some(c)) => match dye::spectrum_from_csv(&dir.join(&c.value)) {
+            (None, Some(c)) => match dye::spectrum_from_csv(&self.data_file(
+                c,
+                "dyes.csv",
+                dir,
+                "a CSV of lambda_nm,eps_l_per_mg_cm rows",
+            )?) {
                 Ok(s) => s,
                 Err(m) => {
                     self.invalid(loc(c), "dyes.csv", format!("{}: {m}", c.value));
@@ -508,7 +549,13 @@ impl Ctx {
         }
     }
 
-    fn fiber(&mut self, f: &Spanned<RawFiber>, dyes: &[Dye], dir: &Path) -> Option<FiberEntry> {
+    fn fiber(
+        &mut self,
+        f: &Spanned<RawFiber>,
+        dyes: &[Dye],
+        broken: &[String],
+        dir: &Path,
+    ) -> Option<FiberEntry> {
         let r = &f.value;
         let types: Vec<(&str, &'static FiberType)> = TABLE_9.iter().map(|t| (t.name, t)).collect();
         let ft: &'static FiberType = self.choice("fibers.type", &r.kind, &types)?;
@@ -594,6 +641,9 @@ impl Ctx {
         let dye = match (&r.dye, &r.depth_of_shade_percent) {
             (Some(name), dos) => {
                 let Some(d) = dyes.iter().find(|d| d.name == name.value) else {
+                    if broken.contains(&name.value) {
+                        return None;
+                    }
                     let names: Vec<&str> = dyes.iter().map(|d| d.name.as_str()).collect();
                     self.out_of_range(
                         loc(name),
@@ -636,13 +686,28 @@ impl Ctx {
             return None;
         }
         let mut variants = Vec::new();
-        if let Some(sw) = &r.sweep {
-            let sw = &sw.value;
+        if let Some(sweep) = &r.sweep {
+            let sw = &sweep.value;
             if sw.undyed.as_ref().is_some_and(|u| u.value) {
                 variants.push(None);
             }
-            for name in &sw.dyes.value {
+            for (i, name) in sw.dyes.value.iter().enumerate() {
+                if let Some(first) = sw.dyes.value[..i].iter().find(|n| n.value == name.value) {
+                    self.invalid(
+                        loc(name),
+                        "fibers.sweep.dyes",
+                        format!(
+                            "{:?} is listed twice (first on line {}); allowed: each dye once",
+                            name.value,
+                            loc(first).0
+                        ),
+                    );
+                    return None;
+                }
                 let Some(d) = dyes.iter().find(|d| d.name == name.value) else {
+                    if broken.contains(&name.value) {
+                        return None;
+                    }
                     let names: Vec<&str> = dyes.iter().map(|d| d.name.as_str()).collect();
                     self.out_of_range(
                         loc(name),
@@ -671,11 +736,11 @@ impl Ctx {
                 );
                 return None;
             }
-            if dye.is_some() {
+            if let (Some(_), Some(d)) = (&dye, &r.dye) {
                 self.invalid(
-                    loc(&r.name),
+                    loc(sweep),
                     "fibers.sweep",
-                    "give `dye` or `sweep`, not both",
+                    format!("give `dye` (line {}) or `sweep`, not both", loc(d).0),
                 );
                 return None;
             }
@@ -723,10 +788,32 @@ impl Ctx {
             return self.generated(&r.name, shape, seed, variant);
         };
         let v = &s.value;
-        let given = [v.shape.is_some(), v.polygon.is_some(), v.mask.is_some()];
-        if given.iter().filter(|&&g| g).count() != 1 {
-            self.invalid(loc(s), "fibers.section", "give exactly one of `shape`, `polygon` (CSV of x_um,y_um) or `mask` (image with `um_per_px`)");
-            return None;
+        let given: Vec<(&str, (u64, u64))> = [
+            ("shape", v.shape.as_ref().map(loc)),
+            ("polygon", v.polygon.as_ref().map(loc)),
+            ("mask", v.mask.as_ref().map(loc)),
+        ]
+        .into_iter()
+        .filter_map(|(k, at)| Some((k, at?)))
+        .collect();
+        const ONE_OF: &str = "give exactly one of `shape`, `polygon` (CSV of x_um,y_um) or `mask` \
+                              (image with `um_per_px`)";
+        match given.as_slice() {
+            [_] => {}
+            [] => {
+                self.invalid(loc(s), "fibers.section", ONE_OF);
+                return None;
+            }
+            [(first, at1), rest @ ..] => {
+                for (k, at) in rest {
+                    self.invalid(
+                        *at,
+                        &format!("fibers.section.{k}"),
+                        format!("{ONE_OF}; `{first}` is on line {}", at1.0),
+                    );
+                }
+                return None;
+            }
         }
         if v.mask.is_none() && (v.um_per_px.is_some() || v.smoothing_passes.is_some()) {
             self.invalid(
@@ -770,7 +857,12 @@ impl Ctx {
             return self.generated(&r.name, sh, seed, variant);
         }
         if let Some(p) = &v.polygon {
-            let file = dir.join(&p.value);
+            let file = self.data_file(
+                p,
+                "fibers.section.polygon",
+                dir,
+                "a CSV of x_um,y_um rows (a blank line or `hole` starts a hole)",
+            )?;
             return match Section::from_csv(&file) {
                 Ok(sec) => Some((SectionSource::Polygon { file }, sec)),
                 Err(e) => {
@@ -794,7 +886,12 @@ impl Ctx {
             o.smoothing_passes =
                 self.in_range("fibers.section.smoothing_passes", sp, 0.0, 100.0, false)? as usize;
         }
-        let file = dir.join(&m.value);
+        let file = self.data_file(
+            m,
+            "fibers.section.mask",
+            dir,
+            "a binary image (PNG) of the cross-section",
+        )?;
         match from_mask(&file, &o) {
             Ok((sec, _)) => Some((SectionSource::Mask { file, um_per_px }, sec)),
             Err(e) => {
@@ -802,6 +899,30 @@ impl Ctx {
                 None
             }
         }
+    }
+
+    /// The file a spec names, relative to the spec's folder; a missing one is reported with
+    /// what it should contain.
+    fn data_file(
+        &mut self,
+        name: &Spanned<String>,
+        field: &str,
+        dir: &Path,
+        what: &str,
+    ) -> Option<PathBuf> {
+        let file = dir.join(&name.value);
+        if file.is_file() {
+            return Some(file);
+        }
+        self.invalid(
+            loc(name),
+            field,
+            format!(
+                "{}: no such file (paths are relative to the spec's folder); expected {what}",
+                file.display()
+            ),
+        );
+        None
     }
 
     fn generated(

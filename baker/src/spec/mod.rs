@@ -6,6 +6,7 @@ pub mod error;
 pub mod fiber;
 pub mod raw;
 pub mod resolve;
+mod syntax;
 
 pub use error::{SpecError, SpecErrors};
 pub use resolve::{load, load_str, ProfileSettings, ResolvedEntry, SkinSpec};

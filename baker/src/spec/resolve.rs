@@ -6,6 +6,7 @@ use std::path::Path;
 
 use super::error::{SpecError, SpecErrors};
 use super::raw::{OneOrMany, RawCollagen, RawLayerValues, RawParams, RawSpec, Spanned, Token};
+use super::syntax;
 use crate::skin::params::{CollagenAging, SkewNormal};
 use crate::skin::{
     BodyLocation, Freeze, Gender, HypodermisAbsorption, Layer, MelaninInput, ModelKind,
@@ -88,12 +89,17 @@ pub fn load(path: &Path) -> Result<SkinSpec, SpecErrors> {
 
 /// Validates spec text; `file` names it in messages.
 pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
-    let raw: RawSpec = parse_yaml(file, text)?;
+    let raw: RawSpec = parse_yaml(file, text, &|t| check_str(file, t))?;
+    resolve_raw(file, raw)
+}
+
+fn resolve_raw(file: &str, raw: RawSpec) -> Result<SkinSpec, SpecErrors> {
     let mut cx = Ctx {
         file: file.to_string(),
         errors: Vec::new(),
     };
     let spec = cx.resolve(raw);
+    cx.dedup();
     if cx.errors.is_empty() {
         Ok(spec)
     } else {
@@ -101,49 +107,59 @@ pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
     }
 }
 
-/// Parses spec text into its raw serde form; a syntax or type error names file:line:column.
+/// Every error of spec text, parse errors undiagnosed ([`syntax::Check`]).
+fn check_str(file: &str, text: &str) -> Vec<SpecError> {
+    match parse_plain::<RawSpec>(file, text) {
+        Ok(raw) => resolve_raw(file, raw).err().map_or_else(Vec::new, |e| e.0),
+        Err(e) => vec![e],
+    }
+}
+
+/// Parses spec text into its raw serde form. A syntax or type error names file:line:column,
+/// the field and, where it can be found, what the field allows ([`syntax::diagnose`]);
+/// `check` validates probed copies of the text for that.
 pub(super) fn parse_yaml<T: serde::de::DeserializeOwned>(
     file: &str,
     text: &str,
+    check: syntax::Check,
 ) -> Result<T, SpecErrors> {
+    parse_plain(file, text).map_err(|e| {
+        let SpecError::Syntax {
+            line,
+            column,
+            message,
+            ..
+        } = e
+        else {
+            return SpecErrors(vec![e]);
+        };
+        let d = syntax::diagnose(text, line, column, &message, check);
+        SpecErrors(vec![SpecError::Syntax {
+            file: file.to_string(),
+            line: d.line,
+            column: d.column,
+            message: d.message,
+        }])
+    })
+}
+
+/// serde-saphyr's error as it comes, at its line and column.
+pub(super) fn parse_plain<T: serde::de::DeserializeOwned>(
+    file: &str,
+    text: &str,
+) -> Result<T, SpecError> {
     serde_saphyr::from_str(text).map_err(|e| {
         let (line, column) = e
             .location()
             .map(|l| (l.line(), l.column()))
             .unwrap_or((0, 0));
-        SpecErrors(vec![SpecError::Syntax {
+        SpecError::Syntax {
             file: file.to_string(),
             line,
             column,
-            message: describe_syntax_error(text, line, &e.to_string()),
-        }])
-    })
-}
-
-/// serde-saphyr's message without its own "error: line L column C:" prefix and source snippet
-/// (we print file:line:column), prefixed with the field when the message lacks it.
-fn describe_syntax_error(text: &str, line: u64, message: &str) -> String {
-    let mut m = message.lines().next().unwrap_or(message).trim();
-    m = m.strip_prefix("error:").unwrap_or(m).trim();
-    if let Some(rest) = m.strip_prefix("line ") {
-        if let Some((_, after)) = rest.split_once(": ") {
-            m = after;
+            message: e.to_string(),
         }
-    }
-    if m.contains("field") {
-        return m.to_string();
-    }
-    // Name the key on the offending line ("age: thirty" → "age: invalid type …").
-    let key = text
-        .lines()
-        .nth(line.saturating_sub(1) as usize)
-        .and_then(|l| l.split_once(':'))
-        .map(|(k, _)| k.trim().trim_start_matches("- ").trim())
-        .filter(|k| !k.is_empty() && !k.contains(' '));
-    match key {
-        Some(k) => format!("{k}: {m}"),
-        None => m.to_string(),
-    }
+    })
 }
 
 pub(super) struct Ctx {
@@ -168,6 +184,18 @@ struct Point {
 }
 
 impl Ctx {
+    /// Drops repeats of an error (one per point of a sweep), keeping the first of each.
+    pub(super) fn dedup(&mut self) {
+        let mut seen = Vec::new();
+        self.errors.retain(|e| {
+            let new = !seen.contains(e);
+            if new {
+                seen.push(e.clone());
+            }
+            new
+        });
+    }
+
     pub(super) fn invalid(&mut self, at: (u64, u64), field: &str, message: impl Into<String>) {
         self.errors.push(SpecError::Invalid {
             file: self.file.clone(),
@@ -300,6 +328,7 @@ impl Ctx {
             };
             let points = expand(&merged);
             self.check_template(&template, &merged);
+            self.reject_repeats(&s.value);
             for point in points {
                 if let Some(params) = self.params(&merged, &point, loc(s)) {
                     entries.push(ResolvedEntry {
@@ -420,21 +449,27 @@ impl Ctx {
         let (lo, hi) = LAMBDA_RANGE_NM;
         let v = &w.value;
         if let Some(list) = &v.list_nm {
-            if v.start_nm.is_some() || v.stop_nm.is_some() || v.step_nm.is_some() {
+            let range = [&v.start_nm, &v.stop_nm, &v.step_nm];
+            if let Some(other) = range.iter().find_map(|x| x.as_ref()) {
                 self.invalid(
-                    loc(w),
-                    "wavelengths",
-                    "give either list_nm or start_nm/stop_nm/step_nm, not both",
+                    loc(list),
+                    "wavelengths.list_nm",
+                    format!(
+                        "give either list_nm or start_nm/stop_nm/step_nm, not both (a range \
+                         field is on line {})",
+                        loc(other).0
+                    ),
                 );
             }
             let mut out = Vec::new();
-            for x in &list.value {
-                if let Some(x) = self.in_range("wavelengths.list_nm", x, lo, hi, false) {
-                    if out.last().is_some_and(|&p| x <= p) {
-                        self.invalid(
-                            loc(list),
+            for x_at in &list.value {
+                if let Some(x) = self.in_range("wavelengths.list_nm", x_at, lo, hi, false) {
+                    if let Some(&p) = out.last().filter(|&&p| x <= p) {
+                        self.out_of_range(
+                            loc(x_at),
                             "wavelengths.list_nm",
-                            "wavelengths must strictly increase",
+                            x.to_string(),
+                            format!("above the previous wavelength, ({p}, {hi}]"),
                         );
                     }
                     out.push(x);
@@ -450,11 +485,21 @@ impl Ctx {
         let stop = self.opt_range("wavelengths.stop_nm", &v.stop_nm, lo, hi, false, 700.0);
         let step = self.opt_range("wavelengths.step_nm", &v.step_nm, 0.0, hi - lo, true, 10.0);
         if stop < start {
-            self.invalid(
-                loc(w),
-                "wavelengths",
-                format!("stop_nm {stop} is below start_nm {start}"),
-            );
+            match (&v.stop_nm, &v.start_nm) {
+                (Some(s), _) => self.out_of_range(
+                    loc(s),
+                    "wavelengths.stop_nm",
+                    stop.to_string(),
+                    format!("[{start}, {hi}] (not below start_nm = {start})"),
+                ),
+                (None, Some(s)) => self.out_of_range(
+                    loc(s),
+                    "wavelengths.start_nm",
+                    start.to_string(),
+                    format!("[{lo}, {stop}] (not above the default stop_nm = {stop})"),
+                ),
+                (None, None) => {}
+            }
             return WavelengthGrid::thesis_default();
         }
         WavelengthGrid::uniform(start, stop, step)
@@ -476,6 +521,44 @@ impl Ctx {
                     at,
                     field,
                     format!("a list of values is only allowed in `sweeps`, not in `{block}`"),
+                );
+            }
+        }
+    }
+
+    /// A swept value listed twice would bake the same entry twice under one name.
+    fn reject_repeats(&mut self, p: &RawParams) {
+        self.repeats("age", &p.age);
+        self.repeats("gender", &p.gender);
+        self.repeats("skin_type", &p.skin_type);
+        self.repeats("melanosome_fraction", &p.melanosome_fraction);
+        self.repeats("location", &p.location);
+        self.repeats("xi", &p.xi);
+        self.repeats("model", &p.model);
+    }
+
+    fn repeats<T: PartialEq + std::fmt::Display>(
+        &mut self,
+        field: &str,
+        v: &Option<Spanned<OneOrMany<T>>>,
+    ) {
+        let Some(Spanned {
+            value: OneOrMany::Many(list),
+            ..
+        }) = v
+        else {
+            return;
+        };
+        for (i, x) in list.iter().enumerate() {
+            if let Some(first) = list[..i].iter().find(|y| y.value == x.value) {
+                self.invalid(
+                    loc(x),
+                    field,
+                    format!(
+                        "{} is listed twice (first on line {}); allowed: each swept value once",
+                        x.value,
+                        loc(first).0
+                    ),
                 );
             }
         }
@@ -549,11 +632,14 @@ impl Ctx {
             (None, Some(f)) => self
                 .in_range("melanosome_fraction", f, 0.0, 0.5, false)
                 .map(MelaninInput::MelanosomeFraction),
-            (Some(t), Some(_)) => {
+            (Some(t), Some(f)) => {
                 self.invalid(
-                    loc(t),
-                    "skin_type",
-                    "give skin_type or melanosome_fraction, not both",
+                    loc(f),
+                    "melanosome_fraction",
+                    format!(
+                        "give skin_type (line {}) or melanosome_fraction, not both",
+                        loc(t).0
+                    ),
                 );
                 None
             }

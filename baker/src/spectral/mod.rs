@@ -61,3 +61,18 @@ impl SpectralData {
         })
     }
 }
+
+/// Every measured data table compiled into the binary, by file name (the unit cache keys
+/// include their checksum: `crate::pipeline`).
+pub const DATA_FILES: &[(&str, &str)] = &[
+    ("hemoglobin_prahl.csv", HEMOGLOBIN),
+    ("bilirubin_li.csv", BILIRUBIN),
+    ("beta_carotene.csv", CAROTENE),
+    ("water_popefry.csv", WATER),
+    ("melanin_sarna.csv", MELANIN),
+    ("cie1931_2deg.csv", include_str!("data/cie1931_2deg.csv")),
+    (
+        "illuminant_d65.csv",
+        include_str!("data/illuminant_d65.csv"),
+    ),
+];

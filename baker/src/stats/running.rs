@@ -1,8 +1,8 @@
 //! Σx and Σx² of per-photon contributions, and the standard error of their mean.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Sums {
     pub sum: f64,
     pub sum2: f64,

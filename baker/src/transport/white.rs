@@ -173,7 +173,7 @@ impl WhiteRun {
 
 /// What one absorption set of [`run_white_sets`] scores: sums over photons, with Σx² for
 /// standard errors.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SetTally {
     /// Diffuse reflectance of scattered light, whole plane.
     pub rd: Sums,
@@ -205,7 +205,7 @@ impl SetTally {
 }
 
 /// One white simulation applied to many absorption sets at once.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct WhiteSets {
     pub photons: u64,
     /// Specular reflectance at the surface (not part of the tallies).

@@ -1,0 +1,377 @@
+//! The build-tool side of `baker bake`: the end of a bake (shard manifest, cache roots,
+//! summary, interruption), `baker merge`, `baker plan` and `baker cache`.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::Ordering::Relaxed;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::{Args, Subcommand};
+
+use super::bake::BakeArgs;
+use crate::output::atomic;
+use crate::pipeline::{interrupt, Key, Runner};
+
+/// Exit code of a bake stopped by SIGINT/SIGTERM (128 + SIGINT, the shell convention).
+pub const EXIT_INTERRUPTED: i32 = 130;
+
+/// What a shard records for `baker merge`.
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+pub struct ShardManifest {
+    pub format: String,
+    pub shard: String,
+    /// Absolute spec paths and their SHA-256 at bake time.
+    pub specs: Vec<(PathBuf, String)>,
+    /// The spec paths as given on the command line (recorded in the tables' provenance; merge
+    /// uses them where they still name the same files, so its tables equal a local bake's).
+    pub given: Vec<PathBuf>,
+    pub photons: Option<u64>,
+    pub entries: Vec<String>,
+    pub no_reuse: bool,
+    pub optics_only: bool,
+    #[serde(default)]
+    pub plots: bool,
+    /// Units this shard holds (computed or found in its cache): id and key.
+    pub units: Vec<(String, String)>,
+}
+
+/// Ends a bake: on success the shard manifest (with `--shard`), the cache roots and the
+/// summary event; on a signal, the `interrupted` event and how to resume.
+pub fn finish(
+    a: &BakeArgs,
+    runner: &Runner,
+    stems: &[String],
+    t0: Instant,
+    result: anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let computed = runner.computed.load(Relaxed);
+    let hits = runner.hits.load(Relaxed);
+    let used: Vec<(String, Key)> = runner.used.lock().unwrap().clone();
+    if let Err(e) = result {
+        if e.downcast_ref::<interrupt::Interrupted>().is_some() {
+            let resume = std::env::args().collect::<Vec<_>>().join(" ");
+            runner
+                .events
+                .emit(serde_json::json!({"event": "interrupted",
+                "units_computed": computed, "resume": resume}));
+            if !a.quiet {
+                eprintln!(
+                    "interrupted: {computed} work units finished and cached; run the same \
+                     command again to resume:\n  {resume}"
+                );
+            }
+            return Err(e);
+        }
+        let code = if e.downcast_ref::<super::UsageError>().is_some() {
+            2
+        } else {
+            1
+        };
+        runner.events.emit(
+            serde_json::json!({"event": "error", "message": format!("{e:#}"),
+            "exit_code": code}),
+        );
+        return Err(e);
+    }
+    // Roots for `baker cache gc`: the keys the last bake of each spec used.
+    if runner.cache.mode != crate::pipeline::CacheMode::Off {
+        let name = match a.shard {
+            Some(s) => format!("{}-shard{}of{}", stems.join("+"), s.index, s.count),
+            None => stems.join("+"),
+        };
+        let p = runner.cache.dir.join("roots").join(format!("{name}.json"));
+        let keys: Vec<String> = used.iter().map(|(_, k)| k.hex()).collect();
+        atomic::write(&p, serde_json::to_string(&keys)?.as_bytes())
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    if let Some(s) = a.shard {
+        let specs = a
+            .specs
+            .iter()
+            .map(|p| {
+                let abs = std::fs::canonicalize(p)
+                    .with_context(|| format!("resolving {}", p.display()))?;
+                Ok((
+                    abs.clone(),
+                    crate::output::manifest::spec_sha256(&abs.to_string_lossy()),
+                ))
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        let m = ShardManifest {
+            format: "baker-shard".into(),
+            shard: format!("{}/{}", s.index, s.count),
+            specs,
+            photons: a.photons,
+            entries: a.entries.clone(),
+            no_reuse: a.no_reuse,
+            optics_only: a.optics_only,
+            plots: a.plots,
+            given: a.specs.clone(),
+            units: used.iter().map(|(id, k)| (id.clone(), k.hex())).collect(),
+        };
+        let p = a.out.join("shard.json");
+        atomic::write(&p, serde_json::to_string_pretty(&m)?.as_bytes())
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    runner
+        .events
+        .emit(serde_json::json!({"event": "summary", "specs": stems,
+        "units_computed": computed, "cache_hits": hits, "seconds": seconds,
+        "shard": a.shard.map(|s| format!("{}/{}", s.index, s.count))}));
+    if a.human() && (hits > 0 || a.shard.is_some()) {
+        eprintln!(
+            "work units: {computed} computed, {hits} from the cache ({})",
+            runner.cache.dir.display()
+        );
+    }
+    Ok(())
+}
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Shard directories written by `baker bake … --shard I/N --out DIR`.
+    #[arg(required = true)]
+    pub shards: Vec<PathBuf>,
+    /// Output root (as `baker bake --out`).
+    #[arg(short = 'o', long = "out", default_value = "out")]
+    pub out: PathBuf,
+    /// Progress (as `baker bake --progress`).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub progress: crate::pipeline::ProgressMode,
+    #[arg(long, short)]
+    pub quiet: bool,
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// `baker merge`: copies the shards' units into OUT's cache and assembles the tables as one
+/// `baker bake` would (every unit must be present: nothing is traced).
+pub fn merge(m: MergeArgs) -> anyhow::Result<()> {
+    let mut first: Option<ShardManifest> = None;
+    let cache_dir = m.out.join(".cache");
+    let mut seen = std::collections::BTreeSet::new();
+    let mut count = None;
+    for d in &m.shards {
+        let p = d.join("shard.json");
+        let text = std::fs::read_to_string(&p).with_context(|| {
+            format!(
+                "{}: not a shard directory (no readable shard.json)",
+                d.display()
+            )
+        })?;
+        let s: ShardManifest = serde_json::from_str(&text)
+            .with_context(|| format!("{}: invalid shard manifest", p.display()))?;
+        let (i, n): (usize, usize) = s
+            .shard
+            .split_once('/')
+            .and_then(|(i, n)| Some((i.parse().ok()?, n.parse().ok()?)))
+            .ok_or_else(|| anyhow::anyhow!("{}: bad shard field {:?}", p.display(), s.shard))?;
+        if *count.get_or_insert(n) != n || !seen.insert(i) {
+            return Err(super::UsageError(format!(
+                "{}: shard {i}/{n} repeats or disagrees with the other shards",
+                d.display()
+            ))
+            .into());
+        }
+        if let Some(f) = &first {
+            if f.specs != s.specs
+                || f.photons != s.photons
+                || f.entries != s.entries
+                || f.no_reuse != s.no_reuse
+                || f.optics_only != s.optics_only
+            {
+                return Err(super::UsageError(format!(
+                    "{}: baked from other specs or flags than {}",
+                    d.display(),
+                    m.shards[0].display()
+                ))
+                .into());
+            }
+        }
+        // Copy the units (they are immutable, content-addressed files).
+        let src = crate::pipeline::Cache::new(d.join(".cache"), crate::pipeline::CacheMode::Use);
+        for (key, path) in src.list() {
+            let dst = crate::pipeline::cache::unit_path(&cache_dir, &key);
+            if !dst.exists() {
+                let bytes =
+                    std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?;
+                atomic::write(&dst, &bytes)
+                    .with_context(|| format!("writing {}", dst.display()))?;
+            }
+        }
+        if first.is_none() {
+            first = Some(s);
+        }
+    }
+    let f = first.expect("at least one shard");
+    let n = count.unwrap_or(0);
+    if seen.len() != n {
+        let missing: Vec<usize> = (1..=n).filter(|i| !seen.contains(i)).collect();
+        return Err(super::UsageError(format!("shards {missing:?} of {n} are missing")).into());
+    }
+    for (spec, sha) in &f.specs {
+        let now = crate::output::manifest::spec_sha256(&spec.to_string_lossy());
+        if &now != sha {
+            return Err(super::UsageError(format!(
+                "{}: the spec changed since the shards were baked",
+                spec.display()
+            ))
+            .into());
+        }
+    }
+    let specs = f
+        .specs
+        .iter()
+        .zip(&f.given)
+        .map(|((abs, _), given)| match std::fs::canonicalize(given) {
+            Ok(g) if &g == abs => given.clone(),
+            _ => abs.clone(),
+        })
+        .collect();
+    let a = BakeArgs {
+        specs,
+        out: m.out.clone(),
+        entries: f.entries,
+        photons: f.photons,
+        threads: m.threads,
+        quiet: m.quiet,
+        optics_only: f.optics_only,
+        no_reuse: f.no_reuse,
+        plots: f.plots,
+        progress: m.progress,
+        shard: None,
+        force: false,
+        cache: Some(cache_dir),
+        require_cached: true,
+    };
+    super::bake::run(a)
+}
+
+#[derive(Debug, Args)]
+pub struct PlanArgs {
+    /// Spec files.
+    #[arg(required = true)]
+    pub specs: Vec<PathBuf>,
+    /// Output root whose cache is consulted (as `baker bake --out`).
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    #[arg(long)]
+    pub photons: Option<u64>,
+    #[arg(long = "entry", value_name = "NAME")]
+    pub entries: Vec<String>,
+    #[arg(long)]
+    pub no_reuse: bool,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `baker plan`: the work units of the specs, their cost and whether they are cached.
+pub fn plan(p: PlanArgs) -> anyhow::Result<()> {
+    let cache = crate::pipeline::Cache::new(
+        p.cache.clone().unwrap_or_else(|| p.out.join(".cache")),
+        crate::pipeline::CacheMode::Use,
+    );
+    let mut units = Vec::new();
+    for path in &p.specs {
+        units.extend(super::bake::plan_units(
+            path, &p.entries, p.photons, p.no_reuse, &cache,
+        )?);
+    }
+    let cached = units.iter().filter(|u| u.cached).count();
+    let photons: u64 = units.iter().filter(|u| !u.cached).map(|u| u.photons).sum();
+    if p.json {
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::json!({
+                "units": units, "total": units.len(), "cached": cached,
+                "photons_to_trace": photons, "cache": cache.dir,
+            }))?
+        )?;
+        return Ok(());
+    }
+    outln!(
+        "{:<56} {:>7} {:>14} {}",
+        "unit",
+        "shard#",
+        "photons",
+        "cached"
+    )?;
+    for u in &units {
+        outln!(
+            "{:<56} {:>7} {:>14} {}",
+            u.id,
+            u.index.map_or("-".into(), |i| i.to_string()),
+            u.photons,
+            if u.cached { "yes" } else { "no" }
+        )?;
+    }
+    outln!(
+        "{} units, {cached} cached; {photons} photons to trace (cache {})",
+        units.len(),
+        cache.dir.display()
+    )?;
+    Ok(())
+}
+
+#[derive(Debug, Subcommand)]
+pub enum CacheCommand {
+    /// Delete cached units that no recorded bake uses (the roots are the keys of the last
+    /// bake of each spec and shard).
+    Gc {
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        #[arg(long, value_name = "DIR")]
+        cache: Option<PathBuf>,
+        /// Only list what would be deleted.
+        #[arg(long)]
+        dry_run: bool,
+    },
+}
+
+pub fn cache(c: CacheCommand) -> anyhow::Result<()> {
+    match c {
+        CacheCommand::Gc {
+            out,
+            cache,
+            dry_run,
+        } => {
+            let dir = cache.unwrap_or_else(|| out.join(".cache"));
+            let c = crate::pipeline::Cache::new(&dir, crate::pipeline::CacheMode::Use);
+            let mut live = std::collections::BTreeSet::new();
+            if let Ok(rd) = std::fs::read_dir(dir.join("roots")) {
+                for f in rd.flatten() {
+                    let text = std::fs::read_to_string(f.path())?;
+                    let keys: Vec<String> = serde_json::from_str(&text)
+                        .with_context(|| format!("{}: invalid roots file", f.path().display()))?;
+                    live.extend(keys.iter().filter_map(|k| Key::from_hex(k)));
+                }
+            }
+            let (mut n, mut bytes) = (0usize, 0u64);
+            for (k, p) in c.list() {
+                if !live.contains(&k) {
+                    bytes += std::fs::metadata(&p).map(|m| m.len()).unwrap_or(0);
+                    n += 1;
+                    if !dry_run {
+                        remove(&p)?;
+                    }
+                }
+            }
+            outln!(
+                "{} {n} unused units ({:.1} MB) from {}; {} in use",
+                if dry_run { "would delete" } else { "deleted" },
+                bytes as f64 / 1e6,
+                dir.display(),
+                live.len()
+            )?;
+            Ok(())
+        }
+    }
+}
+
+fn remove(p: &Path) -> anyhow::Result<()> {
+    std::fs::remove_file(p).with_context(|| format!("deleting {}", p.display()))
+}

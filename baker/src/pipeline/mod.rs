@@ -1,0 +1,269 @@
+//! The bake as a build tool: deterministic work units, a content-addressed cache of their raw
+//! results, machine-readable progress, interruption, and sharding.
+//!
+//! - A **work unit** is one piece of transport whose result depends only on its inputs: a
+//!   skin simulation group × wavelength (and its pilot run), or a run of consecutive stored
+//!   incoming directions of one fiber entry (all its cross-sections).
+//! - Its **key** is the SHA-256 of everything that determines the result ([`KeyBuilder`]):
+//!   the resolved physical inputs, photon counts, seeds, batch sizes, [`ENGINE_VERSION`] and
+//!   the checksums of the data tables compiled into the binary.
+//! - The [`cache`] keeps each unit's raw result (Σw, Σw², photon counts — not only
+//!   normalised values) under its key. A bake whose units are all cached runs no transport
+//!   and assembles byte-identical tables.
+//! - [`events`] reports progress as a bar, as lines, or as JSON events; [`interrupt`] turns
+//!   SIGINT/SIGTERM into a clean stop after the running units.
+//! - A [`Shard`] `I/N` owns every unit whose index in the spec's unit list is ≡ I − 1 (mod N).
+
+pub mod cache;
+pub mod events;
+pub mod interrupt;
+
+use std::fmt;
+
+use sha2::{Digest, Sha256};
+
+pub use cache::{Cache, CacheMode};
+pub use events::{Events, ProgressMode};
+
+/// Bumped whenever a change to the transport or the bake's unit definitions would change a
+/// unit's result for the same inputs: old cache entries then stop matching.
+pub const ENGINE_VERSION: u32 = 1;
+
+/// A unit's content address.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Key(pub [u8; 32]);
+
+impl Key {
+    pub fn hex(&self) -> String {
+        self.0.iter().map(|b| format!("{b:02x}")).collect()
+    }
+
+    pub fn from_hex(s: &str) -> Option<Key> {
+        if s.len() != 64 {
+            return None;
+        }
+        let mut k = [0u8; 32];
+        for (i, b) in k.iter_mut().enumerate() {
+            *b = u8::from_str_radix(s.get(2 * i..2 * i + 2)?, 16).ok()?;
+        }
+        Some(Key(k))
+    }
+}
+
+impl fmt::Debug for Key {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", &self.hex()[..16])
+    }
+}
+
+/// Builds a [`Key`] from labelled parts. Values are rendered with `Debug`, which prints
+/// floating-point numbers in their shortest round-trip form, so two inputs give the same key
+/// only if they are bit-identical.
+pub struct KeyBuilder(Sha256);
+
+impl KeyBuilder {
+    /// A key of `kind` (e.g. `skin-run`), with the engine version and the data checksums.
+    pub fn new(kind: &str) -> KeyBuilder {
+        let mut h = Sha256::new();
+        h.update(b"baker-unit\0");
+        h.update(ENGINE_VERSION.to_le_bytes());
+        h.update(env!("CARGO_PKG_VERSION").as_bytes());
+        h.update([0]);
+        h.update(data_checksum());
+        h.update(kind.as_bytes());
+        h.update([0]);
+        KeyBuilder(h)
+    }
+
+    /// Adds one labelled part.
+    pub fn part(mut self, label: &str, value: &impl fmt::Debug) -> KeyBuilder {
+        self.0.update(label.as_bytes());
+        self.0.update([0]);
+        self.0.update(format!("{value:?}").as_bytes());
+        self.0.update([0]);
+        self
+    }
+
+    /// Adds a digest computed elsewhere (e.g. of a large geometry, computed once).
+    pub fn digest(mut self, label: &str, d: &[u8; 32]) -> KeyBuilder {
+        self.0.update(label.as_bytes());
+        self.0.update([0]);
+        self.0.update(d);
+        self
+    }
+
+    pub fn finish(self) -> Key {
+        Key(self.0.finalize().into())
+    }
+}
+
+/// SHA-256 of the `Debug` rendering of a value (a part digested once, used by many keys).
+pub fn digest_of(value: &impl fmt::Debug) -> [u8; 32] {
+    Sha256::digest(format!("{value:?}").as_bytes()).into()
+}
+
+/// SHA-256 over the measured data tables compiled into the binary (spectra, CIE tables, dye
+/// presets): a changed data file changes every key.
+fn data_checksum() -> [u8; 32] {
+    static SUM: std::sync::OnceLock<[u8; 32]> = std::sync::OnceLock::new();
+    *SUM.get_or_init(|| {
+        let mut h = Sha256::new();
+        for (name, text) in crate::spectral::DATA_FILES
+            .iter()
+            .chain(crate::fiber::dye::DATA_FILES)
+        {
+            h.update(name.as_bytes());
+            h.update([0]);
+            h.update(text.as_bytes());
+            h.update([0]);
+        }
+        h.finalize().into()
+    })
+}
+
+/// `--shard I/N`: this process bakes units whose index ≡ I − 1 (mod N).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based, as Slurm's `$SLURM_ARRAY_TASK_ID` with `--array=1-N`.
+    pub index: usize,
+    pub count: usize,
+}
+
+impl Shard {
+    pub fn owns(&self, unit_index: usize) -> bool {
+        unit_index % self.count == self.index - 1
+    }
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Shard, String> {
+        let bad = || format!("--shard {s:?}: expected I/N with 1 ≤ I ≤ N, e.g. 2/4");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count): (usize, usize) = (
+            i.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if count == 0 || index == 0 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// A unit of a plan: what `baker plan` lists and what the runner executes.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct UnitInfo {
+    /// Stable, readable id, e.g. `fitzpatrick/skin/group3/450nm`.
+    pub id: String,
+    pub key: String,
+    /// Index in the spec's unit list (sharding uses it); pilots are not sharded (`None`).
+    pub index: Option<usize>,
+    /// Estimated cost: photon packets (skin: before the boost of cheap wavelengths; fibers:
+    /// packets × cross-sections × directions).
+    pub photons: u64,
+    pub cached: bool,
+}
+
+/// Why a unit's result is not available.
+#[derive(Debug)]
+pub enum UnitError {
+    /// SIGINT/SIGTERM: stopped before this unit.
+    Interrupted,
+    /// `baker merge`: a unit is in no shard.
+    Missing(String),
+    Failed(anyhow::Error),
+}
+
+/// Everything a bake needs to run units: the cache, progress, interruption, the shard.
+pub struct Runner {
+    pub cache: Cache,
+    pub events: Events,
+    pub shard: Option<Shard>,
+    /// `baker merge`: every unit must come from the cache.
+    pub require_cached: bool,
+    /// Units computed and taken from the cache in this process.
+    pub computed: std::sync::atomic::AtomicUsize,
+    pub hits: std::sync::atomic::AtomicUsize,
+    /// Keys used (for `baker cache gc` roots and shard manifests).
+    pub used: std::sync::Mutex<Vec<(String, Key)>>,
+}
+
+impl Runner {
+    pub fn new(cache: Cache, events: Events, shard: Option<Shard>) -> Runner {
+        Runner {
+            cache,
+            events,
+            shard,
+            require_cached: false,
+            computed: Default::default(),
+            hits: Default::default(),
+            used: Default::default(),
+        }
+    }
+
+    /// Whether this process computes the unit at `index` (always, without a shard; pilots
+    /// have no index and are computed by every shard that needs them).
+    pub fn owns(&self, index: Option<usize>) -> bool {
+        match (self.shard, index) {
+            (Some(s), Some(i)) => s.owns(i),
+            _ => true,
+        }
+    }
+
+    /// The result of a unit: from the cache, or computed (and cached) if this process owns
+    /// it; `Ok(None)` if another shard owns it. Units without an index (pilot runs, fits) are
+    /// computed by whichever process needs them, `baker merge` included.
+    pub fn unit<T>(
+        &self,
+        id: &str,
+        key: Key,
+        index: Option<usize>,
+        photons: u64,
+        compute: impl FnOnce() -> anyhow::Result<T>,
+    ) -> Result<Option<T>, UnitError>
+    where
+        T: serde::Serialize + serde::de::DeserializeOwned,
+    {
+        use std::sync::atomic::Ordering::Relaxed;
+        if let Some(v) = self.cache.load::<T>(&key) {
+            self.hits.fetch_add(1, Relaxed);
+            self.used.lock().unwrap().push((id.to_string(), key));
+            self.events.cache_hit(id, &key);
+            return Ok(Some(v));
+        }
+        if self.require_cached && index.is_some() {
+            return Err(UnitError::Missing(id.to_string()));
+        }
+        if !self.owns(index) {
+            return Ok(None);
+        }
+        if interrupt::requested() {
+            return Err(UnitError::Interrupted);
+        }
+        self.events.unit_started(id, &key);
+        let t0 = std::time::Instant::now();
+        let v = compute().map_err(UnitError::Failed)?;
+        self.cache
+            .store(&key, &v)
+            .map_err(|e| UnitError::Failed(e.context(format!("caching unit {id}"))))?;
+        self.computed.fetch_add(1, Relaxed);
+        self.used.lock().unwrap().push((id.to_string(), key));
+        self.events
+            .unit_finished(id, &key, t0.elapsed().as_secs_f64(), photons);
+        Ok(Some(v))
+    }
+}
+
+impl From<UnitError> for anyhow::Error {
+    fn from(e: UnitError) -> anyhow::Error {
+        match e {
+            UnitError::Interrupted => anyhow::Error::new(interrupt::Interrupted),
+            UnitError::Missing(id) => anyhow::anyhow!(
+                "unit {id} is in none of the shards (were all shards baked with the same spec \
+                 and flags?)"
+            ),
+            UnitError::Failed(e) => e,
+        }
+    }
+}
