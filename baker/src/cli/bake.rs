@@ -208,6 +208,19 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
     let t0 = Instant::now();
     let stem = spec_stem(path);
     let dir = a.out.join(&stem);
+    // Unchanged spec, flags and executable, outputs intact: nothing to do.
+    let stamp = super::pipeline::stamp(a, path)?;
+    if a.shard.is_none() && !a.force && super::pipeline::up_to_date(&dir, &stamp) {
+        runner
+            .events
+            .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
+        say(
+            a,
+            format!("{}: up to date ({})", path.display(), dir.display()),
+        );
+        return Ok(());
+    }
+    let _ = std::fs::remove_file(dir.join(super::pipeline::STAMP_FILE));
     runner
         .events
         .emit(serde_json::json!({"event": "bake_started", "spec": path,
@@ -489,6 +502,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
         serde_json::to_string_pretty(&m)?.as_bytes(),
     )?;
 
+    super::pipeline::write_stamp(&dir, &stamp)?;
     if a.human() {
         summary(
             path,

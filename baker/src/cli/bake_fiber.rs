@@ -69,6 +69,17 @@ pub fn bake_fiber_spec(
     let t0 = Instant::now();
     let stem = super::bake::spec_stem(path);
     let dir = a.out.join(&stem);
+    let stamp = super::pipeline::stamp(a, path)?;
+    if a.shard.is_none() && !a.force && super::pipeline::up_to_date(&dir, &stamp) {
+        runner
+            .events
+            .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
+        if a.human() {
+            eprintln!("{}: up to date ({})", path.display(), dir.display());
+        }
+        return Ok(());
+    }
+    let _ = std::fs::remove_file(dir.join(super::pipeline::STAMP_FILE));
     runner
         .events
         .emit(serde_json::json!({"event": "bake_started", "spec": path,
@@ -123,6 +134,7 @@ pub fn bake_fiber_spec(
         "note": "this run's wall-clock time; units taken from the cache cost nothing"});
     atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
         .with_context(|| format!("writing {}", p.display()))?;
+    super::pipeline::write_stamp(&dir, &stamp)?;
     if a.human() {
         eprintln!(
             "baked {}: {} fibers → {} ({:.1} s)",

@@ -375,3 +375,72 @@ pub fn cache(c: CacheCommand) -> anyhow::Result<()> {
 fn remove(p: &Path) -> anyhow::Result<()> {
     std::fs::remove_file(p).with_context(|| format!("deleting {}", p.display()))
 }
+
+/// The file in a spec's output directory that records what produced it (see [`stamp`]).
+pub const STAMP_FILE: &str = ".baked";
+
+/// What determines a spec's outputs: the spec's bytes, this executable's bytes (code and data
+/// tables), the engine version and the flags that change outputs. Equal stamps and intact
+/// files (checked against the manifest's SHA-256) make a bake a no-op.
+pub fn stamp(a: &BakeArgs, spec: &Path) -> anyhow::Result<String> {
+    static EXE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    let exe = EXE.get_or_init(|| {
+        std::env::current_exe()
+            .ok()
+            .and_then(|p| std::fs::read(p).ok())
+            .map(|b| crate::pipeline::digest_of(&sha_hex(&b)))
+            .map(|d| sha_hex(&d))
+            .unwrap_or_default()
+    });
+    let spec_bytes = std::fs::read(spec).with_context(|| format!("reading {}", spec.display()))?;
+    Ok(sha_hex(&crate::pipeline::digest_of(&(
+        sha_hex(&spec_bytes),
+        spec,
+        exe,
+        crate::pipeline::ENGINE_VERSION,
+        a.photons,
+        &a.entries,
+        a.no_reuse,
+        a.optics_only,
+        a.plots,
+    ))))
+}
+
+fn sha_hex(b: &[u8]) -> String {
+    use sha2::Digest as _;
+    sha2::Sha256::digest(b)
+        .iter()
+        .map(|x| format!("{x:02x}"))
+        .collect()
+}
+
+/// Whether `dir` holds the outputs of `stamp`, every file of its manifest intact.
+pub fn up_to_date(dir: &Path, stamp: &str) -> bool {
+    let Ok(s) = std::fs::read_to_string(dir.join(STAMP_FILE)) else {
+        return false;
+    };
+    if s.trim() != stamp {
+        return false;
+    }
+    let Ok(m) = std::fs::read_to_string(dir.join("manifest.json")) else {
+        return false;
+    };
+    let Ok(m) = serde_json::from_str::<serde_json::Value>(&m) else {
+        return false;
+    };
+    let Some(files) = m["files"].as_array() else {
+        return false;
+    };
+    files.iter().all(|f| {
+        let (Some(rel), Some(sha)) = (f["path"].as_str(), f["sha256"].as_str()) else {
+            return false;
+        };
+        std::fs::read(dir.join(rel)).is_ok_and(|b| sha_hex(&b) == sha)
+    })
+}
+
+/// Records `stamp` once every output of the spec is written.
+pub fn write_stamp(dir: &Path, stamp: &str) -> anyhow::Result<()> {
+    let p = dir.join(STAMP_FILE);
+    atomic::write(&p, stamp.as_bytes()).with_context(|| format!("writing {}", p.display()))
+}

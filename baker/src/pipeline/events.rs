@@ -8,6 +8,7 @@
 //! | `unit_started` | `unit` (id), `key` |
 //! | `unit_finished` | `unit`, `key`, `seconds`, `photons` |
 //! | `cache_hit` | `unit`, `key` |
+//! | `up_to_date` | `spec` (nothing to do: same spec, flags and executable, outputs intact) |
 //! | `output` | `path` (a final file, written atomically) |
 //! | `summary` | `spec`, `units_computed`, `cache_hits`, `seconds`, `shard` |
 //! | `interrupted` | `units_computed`, `resume` (the command to run again) |
