@@ -706,15 +706,16 @@ pub fn plan_units(
         bar: None,
     };
     let units = profile::skin_units(&optics, lam, &bins, &plan, &sim);
+    let prefix = format!("{stem}/skin");
     let nl = lam.len();
     for g in 0..plan.groups.len() {
         for (i, l) in lam.iter().enumerate() {
             if let Some(k) = units.pilot.get(g).and_then(|p| p.get(i)) {
                 out.push(crate::pipeline::UnitInfo {
-                    id: format!("{stem}/skin/pilot/group{g}/{l}nm"),
+                    id: profile::simulate::unit_id(&prefix, "pilot/", g, *l),
                     key: k.hex(),
                     index: None,
-                    photons: (sim.photons / 100).clamp(2_000, 20_000).min(sim.photons),
+                    photons: units.pilot_photons,
                     cached: cache.path(k).exists(),
                 });
             }
@@ -722,7 +723,7 @@ pub fn plan_units(
         for (i, l) in lam.iter().enumerate() {
             let k = &units.run[g][i];
             out.push(crate::pipeline::UnitInfo {
-                id: format!("{stem}/skin/group{g}/{l}nm"),
+                id: profile::simulate::unit_id(&prefix, "", g, *l),
                 key: k.hex(),
                 index: Some(g * nl + i),
                 photons: sim.photons,

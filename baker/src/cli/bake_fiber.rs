@@ -255,18 +255,10 @@ pub fn plan_entry(
     let all: Vec<usize> = (0..n_wi).collect();
     let mut out = Vec::new();
     for chunk in all.chunks(unit_len(n_wi)) {
-        let bins: Vec<usize> = chunk.iter().map(|&i| setup.stored[i]).collect();
-        let key = KeyBuilder::new("fiber-slices")
-            .digest("entry", &setup.key_base)
-            .part("bins", &bins)
-            .finish();
+        let prefix = format!("{stem}/{}", e.name);
+        let (id, key) = unit_id_key(&prefix, chunk, &setup.stored, &setup.key_base);
         out.push(crate::pipeline::UnitInfo {
-            id: format!(
-                "{stem}/{}/wi{}-{}",
-                e.name,
-                chunk[0],
-                chunk[chunk.len() - 1]
-            ),
+            id,
             key: key.hex(),
             index: Some(*unit_index),
             photons: (chunk.len() * setup.fibers.len()) as u64 * st.photons,
@@ -292,6 +284,22 @@ pub fn unit_len(n_wi: usize) -> usize {
     n_wi.div_ceil(48).max(4)
 }
 
+/// Id (`<spec>/<entry>/wi<first>-<last>`) and key of the unit of stored directions `chunk`.
+fn unit_id_key(
+    prefix: &str,
+    chunk: &[usize],
+    stored: &[usize],
+    key_base: &[u8; 32],
+) -> (String, crate::pipeline::Key) {
+    let bins: Vec<usize> = chunk.iter().map(|&i| stored[i]).collect();
+    let key = KeyBuilder::new("fiber-slices")
+        .digest("entry", key_base)
+        .part("bins", &bins)
+        .finish();
+    let id = format!("{prefix}/wi{}-{}", chunk[0], chunk[chunk.len() - 1]);
+    (id, key)
+}
+
 /// The results of one unit (stored directions `chunk`, every section), from the cache or
 /// traced; `None` if another shard owns it.
 #[allow(clippy::too_many_arguments)]
@@ -308,12 +316,7 @@ fn unit_results(
     seed_base: u64,
     bar: Option<&indicatif::ProgressBar>,
 ) -> anyhow::Result<Option<Vec<Vec<bake::SliceResult>>>> {
-    let bins: Vec<usize> = chunk.iter().map(|&i| stored[i]).collect();
-    let key = KeyBuilder::new("fiber-slices")
-        .digest("entry", key_base)
-        .part("bins", &bins)
-        .finish();
-    let id = format!("{}/wi{}-{}", ctx.prefix, chunk[0], chunk[chunk.len() - 1]);
+    let (id, key) = unit_id_key(&ctx.prefix, chunk, stored, key_base);
     let photons = (chunk.len() * fibers.len()) as u64 * st.photons;
     let r = ctx.runner.unit(&id, key, Some(index), photons, || {
         Ok(chunk

@@ -1080,72 +1080,6 @@ impl<'a> Problem<'a> {
     }
 }
 
-/// Nelder–Mead minimisation (Lagarias et al. 1998 coefficients) from `x0` with step `step`.
-fn nelder_mead(
-    f: &mut impl FnMut(&[f64]) -> f64,
-    x0: &[f64],
-    step: f64,
-    max_eval: usize,
-) -> (Vec<f64>, f64, usize) {
-    let n = x0.len();
-    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
-    simplex.push((x0.to_vec(), f(x0)));
-    for i in 0..n {
-        let mut x = x0.to_vec();
-        x[i] += step;
-        let fx = f(&x);
-        simplex.push((x, fx));
-    }
-    let mut evals = n + 1;
-    while evals < max_eval {
-        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let (best, worst) = (simplex[0].1, simplex[n].1);
-        if (worst - best).abs() <= 1e-7 * best.abs().max(1e-12) {
-            break;
-        }
-        let centroid: Vec<f64> = (0..n)
-            .map(|j| simplex[..n].iter().map(|p| p.0[j]).sum::<f64>() / n as f64)
-            .collect();
-        let towards = |t: f64, worst: &[f64]| -> Vec<f64> {
-            (0..n)
-                .map(|j| centroid[j] + t * (worst[j] - centroid[j]))
-                .collect()
-        };
-        let xr = towards(-1.0, &simplex[n].0);
-        let fr = f(&xr);
-        evals += 1;
-        if fr < simplex[0].1 {
-            let xe = towards(-2.0, &simplex[n].0);
-            let fe = f(&xe);
-            evals += 1;
-            simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
-        } else if fr < simplex[n - 1].1 {
-            simplex[n] = (xr, fr);
-        } else {
-            let t = if fr < simplex[n].1 { -0.5 } else { 0.5 };
-            let xc = towards(t, &simplex[n].0);
-            let fc = f(&xc);
-            evals += 1;
-            if fc < fr.min(simplex[n].1) {
-                simplex[n] = (xc, fc);
-            } else {
-                // Shrink towards the best point.
-                let x0 = simplex[0].0.clone();
-                for p in simplex.iter_mut().skip(1) {
-                    for j in 0..n {
-                        p.0[j] = x0[j] + 0.5 * (p.0[j] - x0[j]);
-                    }
-                    p.1 = f(&p.0);
-                }
-                evals += n;
-            }
-        }
-    }
-    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let (x, fx) = simplex.swap_remove(0);
-    (x, fx, evals)
-}
-
 /// Fits the model to `target` (see the module docs for the objective).
 pub fn fit(target: &FitTarget, opts: &FitOptions) -> FitReport {
     let problem = Problem::new(target);
@@ -1172,16 +1106,18 @@ pub fn fit(target: &FitTarget, opts: &FitOptions) -> FitReport {
     }
     let (_, shape0) = start.expect("the grid is not empty");
     let mut objective = |x: &[f64]| problem.objective(Shape::from_x(x, opts.eta)).0;
-    let (mut x, mut fx, n) = nelder_mead(
+    let (mut x, mut fx, n) = crate::fit::nelder_mead(
         &mut objective,
         &shape0.to_x(fit_eta),
         0.6,
         opts.max_evaluations,
+        1e-7,
     );
     evaluations += n;
     // Restart from the best point until it stops improving.
     for step in [0.3, 0.15] {
-        let (x2, f2, n) = nelder_mead(&mut objective, &x, step, opts.max_evaluations);
+        let (x2, f2, n) =
+            crate::fit::nelder_mead(&mut objective, &x, step, opts.max_evaluations, 1e-7);
         evaluations += n;
         let better = f2 < fx * (1.0 - 1e-4);
         if f2 < fx {

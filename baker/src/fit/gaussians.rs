@@ -169,75 +169,15 @@ impl Problem<'_> {
     }
 }
 
-/// Nelder–Mead minimisation (Lagarias et al. 1998 coefficients) from `x0` with step `step`.
+/// The shared simplex with this fit's tolerance (relative 1e-10).
 fn nelder_mead(
     f: &impl Fn(&[f64]) -> f64,
     x0: &[f64],
     step: f64,
     max_eval: usize,
 ) -> (Vec<f64>, f64) {
-    let n = x0.len();
-    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
-    simplex.push((x0.to_vec(), f(x0)));
-    for i in 0..n {
-        let mut x = x0.to_vec();
-        x[i] += step;
-        let fx = f(&x);
-        simplex.push((x, fx));
-    }
-    let mut evals = n + 1;
-    while evals < max_eval {
-        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let (best, worst) = (simplex[0].1, simplex[n].1);
-        if (worst - best).abs() <= 1e-10 * best.abs().max(1e-12) {
-            break;
-        }
-        let centroid: Vec<f64> = (0..n)
-            .map(|j| simplex[..n].iter().map(|p| p.0[j]).sum::<f64>() / n as f64)
-            .collect();
-        let towards = |t: f64| -> Vec<f64> {
-            (0..n)
-                .map(|j| centroid[j] + t * (simplex[n].0[j] - centroid[j]))
-                .collect()
-        };
-        let xr = towards(-1.0);
-        let fr = f(&xr);
-        evals += 1;
-        if fr < simplex[0].1 {
-            let xe = towards(-2.0);
-            let fe = f(&xe);
-            evals += 1;
-            simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
-        } else if fr < simplex[n - 1].1 {
-            simplex[n] = (xr, fr);
-        } else {
-            let (xc, fc) = if fr < simplex[n].1 {
-                let x = towards(-0.5);
-                let fx = f(&x);
-                (x, fx)
-            } else {
-                let x = towards(0.5);
-                let fx = f(&x);
-                (x, fx)
-            };
-            evals += 1;
-            if fc < fr.min(simplex[n].1) {
-                simplex[n] = (xc, fc);
-            } else {
-                // Shrink towards the best point.
-                let x0 = simplex[0].0.clone();
-                for p in simplex.iter_mut().skip(1) {
-                    for j in 0..n {
-                        p.0[j] = x0[j] + 0.5 * (p.0[j] - x0[j]);
-                    }
-                    p.1 = f(&p.0);
-                }
-                evals += n;
-            }
-        }
-    }
-    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    simplex.swap_remove(0)
+    let (x, fx, _) = super::nelder_mead(&mut |x: &[f64]| f(x), x0, step, max_eval, 1e-10);
+    (x, fx)
 }
 
 /// Phase 1 on the smooth least-squares surrogate, phase 2 on the L1 error itself, from `x0`.

@@ -2,5 +2,7 @@
 
 pub mod gaussians;
 pub mod nnls;
+pub mod simplex;
 
 pub use gaussians::{fit_sum_of_gaussians, gaussian_energy, FitOptions, GaussianFit};
+pub use simplex::nelder_mead;

@@ -164,7 +164,8 @@ pub fn simulate(
 pub struct SkinUnits {
     pub pilot: Vec<Vec<Key>>,
     pub run: Vec<Vec<Key>>,
-    pilot_photons: u64,
+    /// Packets of each pilot run.
+    pub pilot_photons: u64,
 }
 
 fn stack_and_sets(
@@ -242,7 +243,7 @@ pub fn skin_units(
 }
 
 /// Unit id: `<prefix>/group<g>/<λ>nm` (pilots: `<prefix>/pilot/group<g>/<λ>nm`).
-fn unit_id(prefix: &str, kind: &str, g: usize, lambda_nm: f64) -> String {
+pub fn unit_id(prefix: &str, kind: &str, g: usize, lambda_nm: f64) -> String {
     format!("{prefix}/{kind}group{g}/{lambda_nm}nm")
 }
 

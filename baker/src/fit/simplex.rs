@@ -1,0 +1,70 @@
+//! Nelder–Mead simplex minimisation, shared by the sum-of-Gaussians fit and the Chiang hair fit.
+
+/// Nelder–Mead minimisation (Lagarias et al. 1998 coefficients) from `x0` with step `step`:
+/// stops after `max_eval` evaluations or when the simplex's values agree to `rel_tol`
+/// (relative). Returns the best point, its value and the evaluations used.
+pub fn nelder_mead(
+    f: &mut impl FnMut(&[f64]) -> f64,
+    x0: &[f64],
+    step: f64,
+    max_eval: usize,
+    rel_tol: f64,
+) -> (Vec<f64>, f64, usize) {
+    let n = x0.len();
+    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
+    simplex.push((x0.to_vec(), f(x0)));
+    for i in 0..n {
+        let mut x = x0.to_vec();
+        x[i] += step;
+        let fx = f(&x);
+        simplex.push((x, fx));
+    }
+    let mut evals = n + 1;
+    while evals < max_eval {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let (best, worst) = (simplex[0].1, simplex[n].1);
+        if (worst - best).abs() <= rel_tol * best.abs().max(1e-12) {
+            break;
+        }
+        let centroid: Vec<f64> = (0..n)
+            .map(|j| simplex[..n].iter().map(|p| p.0[j]).sum::<f64>() / n as f64)
+            .collect();
+        let towards = |t: f64, worst: &[f64]| -> Vec<f64> {
+            (0..n)
+                .map(|j| centroid[j] + t * (worst[j] - centroid[j]))
+                .collect()
+        };
+        let xr = towards(-1.0, &simplex[n].0);
+        let fr = f(&xr);
+        evals += 1;
+        if fr < simplex[0].1 {
+            let xe = towards(-2.0, &simplex[n].0);
+            let fe = f(&xe);
+            evals += 1;
+            simplex[n] = if fe < fr { (xe, fe) } else { (xr, fr) };
+        } else if fr < simplex[n - 1].1 {
+            simplex[n] = (xr, fr);
+        } else {
+            let t = if fr < simplex[n].1 { -0.5 } else { 0.5 };
+            let xc = towards(t, &simplex[n].0);
+            let fc = f(&xc);
+            evals += 1;
+            if fc < fr.min(simplex[n].1) {
+                simplex[n] = (xc, fc);
+            } else {
+                // Shrink towards the best point.
+                let x0 = simplex[0].0.clone();
+                for p in simplex.iter_mut().skip(1) {
+                    for (pj, &bj) in p.0.iter_mut().zip(&x0) {
+                        *pj = bj + 0.5 * (*pj - bj);
+                    }
+                    p.1 = f(&p.0);
+                }
+                evals += n;
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let (x, fx) = simplex.swap_remove(0);
+    (x, fx, evals)
+}
