@@ -4,9 +4,11 @@
 //! measured spectra), [`spec`] (the YAML spec language), [`output`] (atomic writers, plots,
 //! MCML input files), [`cli`] (the commands behind the `baker` binary).
 
+pub mod cancel;
 pub mod cli;
 pub mod export;
 pub mod fiber;
+pub mod files;
 pub mod fit;
 pub mod output;
 pub mod pipeline;

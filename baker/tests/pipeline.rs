@@ -48,7 +48,9 @@ fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
         for e in rd.flatten() {
             let p = e.path();
             let name = e.file_name().to_string_lossy().to_string();
-            if name == ".cache" || name == "timing.json" {
+            // The cache, wall-clock times, and the private staging folder of a bake that was
+            // killed (`.<spec>.partial-<pid>`: never a final name; the next bake removes it).
+            if name == ".cache" || name == "timing.json" || name.contains(".partial-") {
                 continue;
             }
             if p.is_dir() {

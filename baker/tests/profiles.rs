@@ -26,7 +26,7 @@ fn bake(yaml: &str, photons: u64, reuse: bool, max_boost: u64) -> Baked {
         .iter()
         .map(|e| {
             let o = baker::skin::evaluate(&e.params, &spec.wavelengths).unwrap();
-            baker::output::document::entry(e, &o)
+            baker::skin::document::entry(&e.name, &e.params, &o)
         })
         .collect();
     let bins = RadialBins::fine_then_log(0.01, 1.1, 40.0);
@@ -42,7 +42,7 @@ fn bake(yaml: &str, photons: u64, reuse: bool, max_boost: u64) -> Baked {
     let colour = ColourMap::new(lam);
     let rgb = spectral
         .iter()
-        .map(|p| profile::rgb_profile(p, &colour, 6))
+        .map(|p| profile::rgb_profile(p, &colour, 6, baker::cancel::Cancel::NEVER).unwrap())
         .collect();
     Baked {
         names: entries.iter().map(|e| e.name.clone()).collect(),

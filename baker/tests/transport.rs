@@ -66,12 +66,7 @@ fn skin_stack(t: SkinType, lambda_nm: f64, age: f64) -> Stack {
         1.0,
     );
     let o = skin::evaluate(&p, &WavelengthGrid::from_list(vec![lambda_nm])).unwrap();
-    let resolved = baker::spec::ResolvedEntry {
-        name: "t".into(),
-        line: 0,
-        params: p,
-    };
-    let entry = baker::output::document::entry(&resolved, &o);
+    let entry = baker::skin::document::entry("t", &p, &o);
     stack::from_skin(&entry, 0)
 }
 

@@ -13,11 +13,13 @@ use anyhow::Context;
 use clap::Args;
 use rayon::prelude::*;
 
-use super::{load_spec, UsageError};
+use super::UsageError;
+use crate::files::Shown;
+use crate::output::paths::{OutRoot, Staged};
 use crate::output::{self, atomic, manifest, preview, tables};
-use crate::pipeline::{interrupt, Cache, CacheMode, Events, ProgressMode, Runner, Shard};
+use crate::pipeline::{interrupt, Cache, CacheMode, Events, Key, ProgressMode, Runner, Shard};
 use crate::profile::{self, RgbProfile, SimOptions, SpectralProfile};
-use crate::spec::SkinSpec;
+use crate::spec::{budget, names, SkinSpec, Spec};
 use crate::spectral::ColourMap;
 use crate::transport::RadialBins;
 
@@ -63,6 +65,12 @@ pub struct BakeArgs {
     /// Recompute every work unit even if it is cached (and overwrite the cache).
     #[arg(long)]
     pub force: bool,
+    /// Write a subset bake (some --entry, fewer --photons, --optics-only) to OUT/<spec>/
+    /// itself, replacing the finished bake there. Without it a subset goes to
+    /// OUT/<spec>/subset/, and a finished bake of the same spec with more entries or photons
+    /// is never replaced.
+    #[arg(long)]
+    pub replace: bool,
     /// Unit cache directory (default: OUT/.cache).
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
@@ -104,41 +112,27 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
     if a.photons == Some(0) {
         return Err(UsageError("--photons must be at least 1".into()).into());
     }
-    // Validate every spec (and the entry selection) before writing anything.
+    let threads = a.threads.unwrap_or_else(rayon::current_num_threads).max(1);
+    let overrides = budget::Overrides {
+        photons: a.photons,
+        threads,
+        no_reuse: a.no_reuse,
+        optics_only: a.optics_only,
+    };
+    // Validate every spec (entries, sizes, names, cost) before writing anything.
     let specs = a
         .specs
         .iter()
-        .map(|p| {
-            let text = std::fs::read_to_string(p).unwrap_or_default();
-            if crate::spec::fiber::is_fiber_spec(&text) {
-                crate::spec::fiber::load(p)
-                    .map(Loaded::Fiber)
-                    .map_err(|e| UsageError(e.to_string().trim_end().to_string()).into())
-            } else {
-                load_spec(p).map(Loaded::Skin)
-            }
-        })
+        .map(|p| load_checked(p, &overrides).map(|(s, _)| s))
         .collect::<anyhow::Result<Vec<_>>>()?;
     if !a.entries.is_empty() {
         // With several specs an entry may live in any of them; each name must exist somewhere.
-        let names: Vec<(String, String)> = specs
+        let names: Vec<&str> = specs
             .iter()
-            .flat_map(|s| match s {
-                Loaded::Skin(s) => s
-                    .entries
-                    .iter()
-                    .map(|e| (s.file.clone(), e.name.clone()))
-                    .collect::<Vec<_>>(),
-                Loaded::Fiber(s) => s
-                    .fibers
-                    .iter()
-                    .map(|e| (s.file.clone(), e.name.clone()))
-                    .collect(),
-            })
+            .flat_map(|s| s.entries().into_iter().map(|(n, _)| n))
             .collect();
         for name in &a.entries {
-            if !names.iter().any(|(_, n)| n == name) {
-                let all: Vec<&str> = names.iter().map(|(_, n)| n.as_str()).collect();
+            if !names.contains(&name.as_str()) {
                 return Err(UsageError(format!(
                     "{}: no entry named {name:?}; entries: {}",
                     a.specs
@@ -146,14 +140,15 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
                         .map(|p| p.display().to_string())
                         .collect::<Vec<_>>()
                         .join(", "),
-                    all.join(", ")
+                    names.join(", ")
                 ))
                 .into());
             }
         }
     }
+    let root = OutRoot::open(&a.out).map_err(|e| UsageError(e.to_string()))?;
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(a.threads.unwrap_or(0))
+        .num_threads(threads)
         .build()?;
     interrupt::install();
     interrupt::set_silent(!a.human());
@@ -162,22 +157,37 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
     let mut stems = Vec::new();
     let result = (|| -> anyhow::Result<()> {
         for (path, spec) in a.specs.iter().zip(&specs) {
-            stems.push(spec_stem(path));
-            match spec {
-                Loaded::Skin(s) => {
-                    let has = a.entries.is_empty()
-                        || s.entries.iter().any(|e| a.entries.contains(&e.name));
-                    if has {
-                        pool.install(|| bake_spec(&a, path, s, &runner))?
-                    }
-                }
-                Loaded::Fiber(s) => {
-                    let has = a.entries.is_empty()
-                        || s.fibers.iter().any(|e| a.entries.contains(&e.name));
-                    if has {
-                        pool.install(|| super::bake_fiber::bake_fiber_spec(&a, path, s, &runner))?
-                    }
-                }
+            let stem = spec_stem(path)?;
+            stems.push(stem.clone());
+            let has = a.entries.is_empty()
+                || spec
+                    .entries()
+                    .iter()
+                    .any(|(n, _)| a.entries.iter().any(|e| e == n));
+            if !has {
+                continue;
+            }
+            let first_unit = runner.used.lock().unwrap().len();
+            let dest = if a.shard.is_some() {
+                None
+            } else {
+                Some(destination(&a, &root, &stem, spec)?)
+            };
+            let baked = match spec {
+                Spec::Skin(s) => pool.install(|| bake_spec(&a, path, s, &runner, dest.as_ref()))?,
+                Spec::Fiber(s) => pool.install(|| {
+                    super::bake_fiber::bake_fiber_spec(&a, path, s, &runner, dest.as_ref())
+                })?,
+            };
+            if let (Some(d), true) = (dest, baked) {
+                let keys: Vec<Key> = runner.used.lock().unwrap()[first_unit..]
+                    .iter()
+                    .map(|(_, k)| *k)
+                    .collect();
+                let rel = d.rel.clone();
+                d.commit()?;
+                // The finished output's units are live for `baker cache gc`.
+                super::pipeline::write_roots(&runner, &root, &rel, &keys)?;
             }
         }
         Ok(())
@@ -185,17 +195,193 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
     super::pipeline::finish(&a, &runner, &stems, t0, result)
 }
 
-/// The output directory name of a spec: its file stem.
-pub fn spec_stem(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or_else(|| "spec".into())
+/// Loads a spec of either kind and checks what baking it with `o` costs; every problem is a
+/// [`UsageError`] naming file:line.
+pub fn load_checked(path: &Path, o: &budget::Overrides) -> anyhow::Result<(Spec, budget::Cost)> {
+    let usage = |e: crate::spec::SpecErrors| UsageError(e.to_string().trim_end().to_string());
+    let spec = crate::spec::load_any(path).map_err(usage)?;
+    let cost = budget::check(&spec, o).map_err(usage)?;
+    Ok((spec, cost))
 }
 
-/// A spec of either kind.
-enum Loaded {
-    Skin(SkinSpec),
-    Fiber(crate::spec::fiber::FiberSpec),
+/// The output folder name of a spec: its file stem, which must be a plain folder name.
+pub fn spec_stem(path: &Path) -> anyhow::Result<String> {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    names::check_stem(&stem).map_err(|m| {
+        UsageError(format!(
+            "{}: the spec's file name gives the output folder name {stem:?}, which {m}; rename \
+             the spec file",
+            Shown(path)
+        ))
+    })?;
+    Ok(stem)
+}
+
+/// Where a bake of one spec goes. Nothing finished is replaced by less:
+///
+/// - a bake of part of a spec (some `--entry`s, fewer `--photons` than the spec asks for,
+///   `--optics-only`) goes to `OUT/<stem>/subset/` when `OUT/<stem>/` holds a finished bake;
+/// - a whole bake goes to `OUT/<stem>/subset/` when `OUT/<stem>/` holds a bake of the same spec
+///   with more photons (`--photons` above the spec's);
+/// - anything else (a first bake, a whole bake of a changed spec) to `OUT/<stem>/`;
+/// - `--replace` always to `OUT/<stem>/`.
+pub struct Destination {
+    /// Relative to the output root, `/`-separated.
+    pub rel: String,
+    pub staged: Staged,
+    /// What the folder held before (its manifest's top-level names), kept or replaced.
+    pub previous: std::collections::BTreeSet<String>,
+}
+
+/// The subset folder's name inside a spec's output folder.
+pub const SUBSET_DIR: &str = "subset";
+
+fn destination(
+    a: &BakeArgs,
+    root: &OutRoot,
+    stem: &str,
+    spec: &Spec,
+) -> anyhow::Result<Destination> {
+    let full_dir = root.join(stem)?;
+    let selected = spec
+        .entries()
+        .iter()
+        .filter(|(n, _)| a.entries.is_empty() || a.entries.iter().any(|e| e == n))
+        .count();
+    let spec_photons = match spec {
+        Spec::Skin(s) => s.profiles.photons,
+        Spec::Fiber(s) => s.bake.photons,
+    };
+    let photons = a.photons.unwrap_or(spec_photons);
+    let partial = selected < spec.entries().len() || photons < spec_photons || a.optics_only;
+    let finished = manifest_summary(&full_dir);
+    let bigger = finished.as_ref().is_some_and(|m| {
+        partial || (m.spec_sha256 == spec_sha(spec) && m.photons.is_some_and(|p| p > photons))
+    });
+    let subset = !a.replace && bigger;
+    let rel = if subset {
+        format!("{stem}/{SUBSET_DIR}")
+    } else {
+        stem.to_string()
+    };
+    if subset && a.human() {
+        let why = if partial {
+            "part of the spec"
+        } else {
+            "fewer photons than the finished bake of the same spec"
+        };
+        eprintln!(
+            "{}: this bake is {why}, and {} holds a finished bake; writing to {} instead \
+             (--replace writes over the finished bake)",
+            spec.file(),
+            Shown(&full_dir),
+            Shown(&root.join(&rel)?),
+        );
+    }
+    let staged = Staged::begin(root, &rel)?;
+    let previous = manifest_summary(staged.target())
+        .map(|m| m.top_level)
+        .unwrap_or_default();
+    Ok(Destination {
+        rel,
+        staged,
+        previous,
+    })
+}
+
+fn spec_sha(spec: &Spec) -> &str {
+    match spec {
+        Spec::Skin(s) => &s.sha256,
+        Spec::Fiber(s) => &s.sha256,
+    }
+}
+
+/// What a finished bake's manifest says about it.
+pub struct ManifestSummary {
+    pub spec_sha256: String,
+    pub entries: usize,
+    pub photons: Option<u64>,
+    /// First components of the paths of its files.
+    pub top_level: std::collections::BTreeSet<String>,
+    /// Keys of the work units it was assembled from.
+    pub units: Vec<String>,
+}
+
+/// Reads `dir/manifest.json` (skin or fiber), if there is a readable one.
+pub fn manifest_summary(dir: &Path) -> Option<ManifestSummary> {
+    let text = crate::files::read_text(
+        &dir.join("manifest.json"),
+        crate::files::MAX_SPEC_BYTES,
+        "a manifest",
+    )
+    .ok()?;
+    let m: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let top_level = m["files"]
+        .as_array()?
+        .iter()
+        .filter_map(|f| f["path"].as_str()?.split('/').next().map(str::to_string))
+        .collect();
+    let photons = m["settings"]["photons"].as_u64();
+    Some(ManifestSummary {
+        spec_sha256: m["spec_sha256"].as_str().unwrap_or_default().to_string(),
+        entries: m["entries"].as_array().map_or(0, Vec::len),
+        photons,
+        top_level,
+        units: m["units"]
+            .as_array()
+            .map(|u| {
+                u.iter()
+                    .filter_map(|k| k.as_str().map(str::to_string))
+                    .collect()
+            })
+            .unwrap_or_default(),
+    })
+}
+
+/// Top-level names a bake of either kind writes into a spec's folder.
+const BAKE_FILES: [&str; 10] = [
+    "manifest.json",
+    "timing.json",
+    crate::output::STAMP_FILE,
+    "optics.json",
+    "optics",
+    "profiles.h5",
+    "profiles.bkt",
+    "profiles_rgb.exr",
+    "preview",
+    "plots",
+];
+
+impl Destination {
+    /// Puts the finished bake in place; what the folder held that no bake wrote (a subset
+    /// folder, a user's notes) is kept.
+    pub fn commit(self) -> anyhow::Result<()> {
+        let previous = self.previous;
+        let target = self.staged.target().to_path_buf();
+        self.staged
+            .commit(|name| !BAKE_FILES.contains(&name) && !previous.contains(name))
+            .with_context(|| format!("putting the bake in place at {}", Shown(&target)))
+    }
+}
+
+/// The layer optics of the entries of `spec` that `pick` selects (the resolver has evaluated
+/// them once already, so this cannot fail on a resolved spec).
+pub fn skin_optics(
+    spec: &SkinSpec,
+    pick: impl Fn(&crate::spec::ResolvedEntry) -> bool,
+) -> anyhow::Result<Vec<formats::OpticsEntry>> {
+    spec.entries
+        .iter()
+        .filter(|e| pick(e))
+        .map(|e| {
+            let o = crate::skin::evaluate(&e.params, &spec.wavelengths)
+                .with_context(|| format!("{}:{}: entry {}", spec.file, e.line, e.name))?;
+            Ok(crate::skin::document::entry(&e.name, &e.params, &o))
+        })
+        .collect()
 }
 
 fn say(a: &BakeArgs, msg: impl AsRef<str>) {
@@ -204,56 +390,63 @@ fn say(a: &BakeArgs, msg: impl AsRef<str>) {
     }
 }
 
-fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> anyhow::Result<()> {
+/// Bakes a skin spec into `out` (`None` for a shard: units only). `Ok(false)` when the
+/// finished folder is up to date and nothing was written.
+fn bake_spec(
+    a: &BakeArgs,
+    path: &Path,
+    spec: &SkinSpec,
+    runner: &Runner,
+    out: Option<&Destination>,
+) -> anyhow::Result<bool> {
     let t0 = Instant::now();
-    let stem = spec_stem(path);
-    let dir = a.out.join(&stem);
+    let stem = spec_stem(path)?;
     // Unchanged spec, flags and executable, outputs intact: nothing to do.
-    let stamp = super::pipeline::stamp(a, path)?;
-    if a.shard.is_none() && !a.force && super::pipeline::up_to_date(&dir, &stamp) {
-        runner
-            .events
-            .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
-        say(
-            a,
-            format!("{}: up to date ({})", path.display(), dir.display()),
-        );
-        return Ok(());
+    let stamp = super::pipeline::stamp(a, path, &spec.sha256);
+    if let Some(d) = out {
+        if !a.force && super::pipeline::up_to_date(d.staged.target(), &stamp) {
+            runner
+                .events
+                .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
+            say(
+                a,
+                format!(
+                    "{}: up to date ({})",
+                    path.display(),
+                    Shown(d.staged.target())
+                ),
+            );
+            return Ok(false);
+        }
     }
-    let _ = std::fs::remove_file(dir.join(super::pipeline::STAMP_FILE));
+    // Paths inside the folder being written, and the finished folder's name for messages.
+    let at = |rel: &str| -> anyhow::Result<PathBuf> {
+        Ok(out.expect("a shard writes no files").staged.path(rel)?)
+    };
+    let shown = out.map_or_else(PathBuf::new, |d| d.staged.target().to_path_buf());
+    let first_unit = runner.used.lock().unwrap().len();
     runner
         .events
         .emit(serde_json::json!({"event": "bake_started", "spec": path,
         "kind": "skin", "entries": spec.entries.iter()
             .filter(|e| a.entries.is_empty() || a.entries.contains(&e.name)).count()}));
-    let selected: Vec<&crate::spec::ResolvedEntry> = spec
-        .entries
-        .iter()
-        .filter(|e| a.entries.is_empty() || a.entries.contains(&e.name))
-        .collect();
-    let entries = selected
-        .iter()
-        .map(|e| {
-            let o = crate::skin::evaluate(&e.params, &spec.wavelengths).map_err(|err| {
-                UsageError(format!("{}:{}: entry {}: {err}", spec.file, e.line, e.name))
-            })?;
-            Ok(output::document::entry(e, &o))
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
+    let entries = skin_optics(spec, |e| {
+        a.entries.is_empty() || a.entries.contains(&e.name)
+    })?;
     let lam = spec.wavelengths.lambda_nm();
     // A shard only computes work units; `baker merge` writes every product.
-    let sharded = a.shard.is_some();
+    let sharded = out.is_none();
     for e in entries.iter().filter(|_| !sharded) {
-        let p = dir.join("optics").join(format!("{}.csv", e.name));
+        let p = at(&format!("optics/{}.csv", e.name))?;
         atomic::write(&p, output::csv::entry_csv(lam, e).as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
     }
     if a.plots && !sharded {
-        super::optics::write_plots(&dir.join("plots"), lam, &entries)?;
+        super::optics::write_plots(&at("plots")?, lam, &entries)?;
     }
-    let doc = output::document::document(&spec.file, lam, entries.clone());
-    let p = dir.join("optics.json");
+    let doc = crate::skin::document::document(&spec.file, lam, entries.clone());
     if !sharded {
+        let p = at("optics.json")?;
         atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
     }
@@ -265,11 +458,12 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
                 path.display(),
                 entries.len(),
                 lam.len(),
-                dir.display(),
+                shown.display(),
                 t0.elapsed().as_secs_f64()
             ),
         );
-        return Ok(());
+        write_skin_manifest_optics_only(spec, &entries, out, &stamp)?;
+        return Ok(true);
     }
 
     // Diffusion profiles.
@@ -326,7 +520,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
     }
     let Some(spectral) = spectral.filter(|_| !sharded) else {
         // A shard: its units are cached; `baker merge` assembles.
-        return Ok(());
+        return Ok(true);
     };
     let sim_seconds = t_sim.elapsed().as_secs_f64();
     let colour = ColourMap::new(lam);
@@ -343,7 +537,12 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
             let id = format!("{stem}/fit/{}", e.name);
             runner
                 .unit(&id, key, None, 0, || {
-                    Ok(profile::rgb_profile(p, &colour, settings.gaussians))
+                    Ok(profile::rgb_profile(
+                        p,
+                        &colour,
+                        settings.gaussians,
+                        runner.cancel,
+                    )?)
                 })
                 .map_err(anyhow::Error::from)
                 .map(|r| r.expect("fit units are never sharded"))
@@ -376,7 +575,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
             ("format".into(), tables::FORMAT.into()),
             ("format_version".into(), u64::from(tables::FORMAT_VERSION).into()),
             ("spec_file".into(), spec.file.clone().into()),
-            ("spec_sha256".into(), manifest::spec_sha256(&spec.file).into()),
+            ("spec_sha256".into(), spec.sha256.clone().into()),
             ("baker_version".into(), env!("CARGO_PKG_VERSION").into()),
             ("photons".into(), photons.into()),
             ("seed".into(), settings.seed.into()),
@@ -405,16 +604,12 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
         t.groups
             .push(tables::entry_group(e, entry_attrs(e, p), p, r));
     }
-    output::hdf5::write(&dir.join("profiles.h5"), &t)?;
-    output::bkt::write(&dir.join("profiles.bkt"), &t)?;
+    runner.cancel.check()?;
+    output::hdf5::write(&at("profiles.h5")?, &t)?;
+    output::bkt::write(&at("profiles.bkt")?, &t)?;
     let names: Vec<String> = entries.iter().map(|e| e.name.clone()).collect();
     let rows: Vec<&[[f64; 3]]> = rgb.iter().map(|r| r.rd_rgb_per_mm2.as_slice()).collect();
-    output::exr::write(
-        &dir.join("profiles_rgb.exr"),
-        &names,
-        bins.edges_mm(),
-        &rows,
-    )?;
+    output::exr::write(&at("profiles_rgb.exr")?, &names, bins.edges_mm(), &rows)?;
 
     // Previews.
     let sheet: Vec<preview::SheetEntry> = entries
@@ -422,10 +617,11 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
         .zip(&rgb)
         .map(|(e, r)| sheet_entry(e, r))
         .collect();
-    let sheets = preview::contact_sheets(&dir.join("preview"), &sheet)?;
+    runner.cancel.check()?;
+    let sheets = preview::contact_sheets(&at("preview")?, &sheet)?;
     entries.par_iter().zip(&rgb).try_for_each(|(e, r)| {
         preview::profile_plot(
-            &dir.join("preview/profiles").join(format!("{}.png", e.name)),
+            &at(&format!("preview/profiles/{}.png", e.name))?,
             &e.name,
             bins.edges_mm(),
             r,
@@ -433,6 +629,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
     })?;
 
     // Manifest.
+    let dir = out.expect("a shard has returned").staged.dir();
     let mut files = vec![
         manifest::file_entry(&dir, "profiles.h5", "HDF5 tables (formats/FORMAT.md)")?,
         manifest::file_entry(
@@ -477,7 +674,7 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
         "format": "baker-manifest",
         "version": 1,
         "spec_file": spec.file,
-        "spec_sha256": manifest::spec_sha256(&spec.file),
+        "spec_sha256": spec.sha256,
         "baker_version": env!("CARGO_PKG_VERSION"),
         "settings": {
             "photons": photons,
@@ -496,17 +693,18 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
         "entries": manifest_entries,
         "files": files,
         "warnings": warnings,
+        "units": unit_keys(runner, first_unit),
     });
+    runner.cancel.check()?;
     atomic::write(
-        &dir.join("manifest.json"),
+        &at("manifest.json")?,
         serde_json::to_string_pretty(&m)?.as_bytes(),
     )?;
-
-    super::pipeline::write_stamp(&dir, &stamp)?;
+    super::pipeline::write_stamp(dir, &stamp)?;
     if a.human() {
         summary(
             path,
-            &dir,
+            &shown,
             &entries,
             &spectral,
             &rgb,
@@ -516,7 +714,60 @@ fn bake_spec(a: &BakeArgs, path: &Path, spec: &SkinSpec, runner: &Runner) -> any
             t0,
         );
     }
-    Ok(())
+    Ok(true)
+}
+
+/// The keys of the units this process used since `first`, sorted, each once (units run in
+/// parallel, so use order is not reproducible; the manifest must be).
+pub fn unit_keys(runner: &Runner, first: usize) -> Vec<String> {
+    let used = runner.used.lock().unwrap();
+    let mut keys: Vec<String> = used[first.min(used.len())..]
+        .iter()
+        .map(|(_, k)| k.hex())
+        .collect();
+    keys.sort();
+    keys.dedup();
+    keys
+}
+
+/// The manifest and stamp of an `--optics-only` bake: the layer optics it wrote.
+fn write_skin_manifest_optics_only(
+    spec: &SkinSpec,
+    entries: &[formats::OpticsEntry],
+    out: Option<&Destination>,
+    stamp: &str,
+) -> anyhow::Result<()> {
+    let Some(d) = out else { return Ok(()) };
+    let dir = d.staged.dir();
+    let mut files = vec![manifest::file_entry(
+        dir,
+        "optics.json",
+        "layer optics of every entry",
+    )?];
+    for e in entries {
+        files.push(manifest::file_entry(
+            dir,
+            &format!("optics/{}.csv", e.name),
+            "layer optics table",
+        )?);
+    }
+    let m = serde_json::json!({
+        "format": "baker-manifest",
+        "version": 1,
+        "kind": "skin",
+        "spec_file": spec.file,
+        "spec_sha256": spec.sha256,
+        "baker_version": env!("CARGO_PKG_VERSION"),
+        "settings": {"optics_only": true, "wavelengths_nm": spec.wavelengths.lambda_nm()},
+        "entries": entries.iter().map(|e| serde_json::json!({"name": e.name, "params": e.inputs, "model": e.model})).collect::<Vec<_>>(),
+        "files": files,
+        "units": [],
+    });
+    atomic::write(
+        &d.staged.path("manifest.json")?,
+        serde_json::to_string_pretty(&m)?.as_bytes(),
+    )?;
+    super::pipeline::write_stamp(dir, stamp)
 }
 
 fn entry_attrs(e: &formats::OpticsEntry, p: &SpectralProfile) -> Vec<(String, tables::Attr)> {
@@ -657,43 +908,32 @@ pub fn max_relative_se(edges_mm: &[f64], r: &RgbProfile, c: usize, r_max_mm: f64
 /// `baker plan`: the work units of one spec (as `baker bake` with the same flags would run
 /// them), with whether each is in `cache`.
 pub fn plan_units(
-    path: &Path,
+    spec: &Spec,
+    stem: &str,
     entries: &[String],
     photons: Option<u64>,
     no_reuse: bool,
     cache: &Cache,
 ) -> anyhow::Result<Vec<crate::pipeline::UnitInfo>> {
-    let stem = spec_stem(path);
-    let text = std::fs::read_to_string(path).unwrap_or_default();
     let pick = |name: &str| entries.is_empty() || entries.iter().any(|e| e == name);
     let mut out = Vec::new();
-    if crate::spec::fiber::is_fiber_spec(&text) {
-        let spec = crate::spec::fiber::load(path)
-            .map_err(|e| UsageError(e.to_string().trim_end().to_string()))?;
-        let mut st = spec.bake.clone();
-        if let Some(p) = photons {
-            st.photons = p;
+    let spec = match spec {
+        Spec::Fiber(spec) => {
+            let mut st = spec.bake.clone();
+            if let Some(p) = photons {
+                st.photons = p;
+            }
+            let mut index = 0;
+            for e in spec.fibers.iter().filter(|e| pick(&e.name)) {
+                out.extend(super::bake_fiber::plan_entry(
+                    stem, e, &st, cache, &mut index,
+                )?);
+            }
+            return Ok(out);
         }
-        let mut index = 0;
-        for e in spec.fibers.iter().filter(|e| pick(&e.name)) {
-            out.extend(super::bake_fiber::plan_entry(
-                &spec, &stem, e, &st, cache, &mut index,
-            )?);
-        }
-        return Ok(out);
-    }
-    let spec = load_spec(path)?;
-    let optics = spec
-        .entries
-        .iter()
-        .filter(|e| pick(&e.name))
-        .map(|e| {
-            let o = crate::skin::evaluate(&e.params, &spec.wavelengths).map_err(|err| {
-                UsageError(format!("{}:{}: entry {}: {err}", spec.file, e.line, e.name))
-            })?;
-            Ok(output::document::entry(e, &o))
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
+        Spec::Skin(s) => s,
+    };
+    let optics = skin_optics(spec, |e| pick(&e.name))?;
     let lam = spec.wavelengths.lambda_nm();
     let s = &spec.profiles;
     let bins = RadialBins::fine_then_log(s.dr_min_mm, s.growth, s.r_max_mm);

@@ -20,14 +20,18 @@ use ndarray::{s, ArrayView3, ArrayView4, ArrayView5};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::bake::BakeArgs;
-use crate::fiber::bake::{self, incident_of_bin, name_hash, task_seed, BakeSettings, Noise};
+use super::bake::{BakeArgs, Destination};
+use crate::fiber::bake::{
+    self, incident_of_bin, name_hash, task_seed, unit_len, BakeSettings, Noise,
+};
 use crate::fiber::sweep::{Channels, Variant};
-use crate::fiber::symmetry::{self, Symmetry};
+use crate::fiber::symmetry::Symmetry;
 use crate::fiber::{AngularGrid, Fiber};
+use crate::files::Shown;
+use crate::output::paths::Staged;
 use crate::output::{atomic, exr, hdf5 as h5out, manifest, slice};
 use crate::pipeline::{KeyBuilder, Runner};
-use crate::spec::fiber::{FiberEntry, FiberSpec, SymmetryMode};
+use crate::spec::fiber::{FiberEntry, FiberSpec};
 use crate::spectral::ColourMap;
 use formats::bcsdf::{self, Bcsdf, Directory, Writer, KIND};
 
@@ -59,27 +63,34 @@ pub struct EntryReport {
     pub hdf5_bytes: u64,
 }
 
-/// Bakes every selected entry of a fiber spec.
+/// Bakes every selected entry of a fiber spec into `out` (`None` for a shard: units only).
+/// `Ok(false)` when the finished folder is up to date and nothing was written.
 pub fn bake_fiber_spec(
     a: &BakeArgs,
     path: &Path,
     spec: &FiberSpec,
     runner: &Runner,
-) -> anyhow::Result<()> {
+    out: Option<&Destination>,
+) -> anyhow::Result<bool> {
     let t0 = Instant::now();
-    let stem = super::bake::spec_stem(path);
-    let dir = a.out.join(&stem);
-    let stamp = super::pipeline::stamp(a, path)?;
-    if a.shard.is_none() && !a.force && super::pipeline::up_to_date(&dir, &stamp) {
-        runner
-            .events
-            .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
-        if a.human() {
-            eprintln!("{}: up to date ({})", path.display(), dir.display());
+    let stem = super::bake::spec_stem(path)?;
+    let stamp = super::pipeline::stamp(a, path, &spec.sha256);
+    if let Some(d) = out {
+        if !a.force && super::pipeline::up_to_date(d.staged.target(), &stamp) {
+            runner
+                .events
+                .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
+            if a.human() {
+                eprintln!(
+                    "{}: up to date ({})",
+                    path.display(),
+                    Shown(d.staged.target())
+                );
+            }
+            return Ok(false);
         }
-        return Ok(());
     }
-    let _ = std::fs::remove_file(dir.join(super::pipeline::STAMP_FILE));
+    let first_unit = runner.used.lock().unwrap().len();
     runner
         .events
         .emit(serde_json::json!({"event": "bake_started", "spec": path,
@@ -103,16 +114,17 @@ pub fn bake_fiber_spec(
             runner,
             prefix: format!("{stem}/{}", e.name),
         };
-        if let Some((r, f)) = bake_entry(a, &dir, spec, e, &settings, &ctx, &mut unit_index)? {
+        if let Some((r, f)) = bake_entry(a, out, spec, e, &settings, &ctx, &mut unit_index)? {
             timing.push(serde_json::json!({"entry": r.name, "seconds": r.seconds,
                 "photons_per_s": r.photons_per_s}));
             reports.push(r);
             files.extend(f);
         }
     }
-    if a.shard.is_some() {
-        return Ok(());
-    }
+    let Some(d) = out else {
+        return Ok(true);
+    };
+    let dir = d.staged.dir();
     let mut mfiles = Vec::new();
     for (rel, desc) in &files {
         mfiles.push(manifest::file_entry(&dir, rel, desc)?);
@@ -120,31 +132,34 @@ pub fn bake_fiber_spec(
     let doc = serde_json::json!({
         "kind": "baker-fiber-bake",
         "spec": spec.file,
+        "spec_sha256": spec.sha256,
         "settings": settings,
         "entries": reports,
         "files": mfiles,
+        "units": super::bake::unit_keys(runner, first_unit),
     });
-    let p = dir.join("manifest.json");
+    runner.cancel.check()?;
+    let p = d.staged.path("manifest.json")?;
     atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
         .with_context(|| format!("writing {}", p.display()))?;
     // Wall-clock figures change from run to run (and a cached unit costs nothing): they live
     // apart from the manifest, which is byte-identical for the same spec and flags.
-    let p = dir.join("timing.json");
+    let p = d.staged.path("timing.json")?;
     let doc = serde_json::json!({"seconds": t0.elapsed().as_secs_f64(), "entries": timing,
         "note": "this run's wall-clock time; units taken from the cache cost nothing"});
     atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
         .with_context(|| format!("writing {}", p.display()))?;
-    super::pipeline::write_stamp(&dir, &stamp)?;
+    super::pipeline::write_stamp(dir, &stamp)?;
     if a.human() {
         eprintln!(
             "baked {}: {} fibers → {} ({:.1} s)",
             path.display(),
             reports.len(),
-            dir.display(),
+            Shown(d.staged.target()),
             t0.elapsed().as_secs_f64()
         );
     }
-    Ok(())
+    Ok(true)
 }
 
 /// The variants of an entry as μa spectra.
@@ -165,18 +180,6 @@ pub fn variants_of(e: &FiberEntry, lambda_nm: &[f64]) -> Vec<Variant> {
 pub fn typical_path_um(f: &Fiber) -> f64 {
     let s = f.cuticle_slope().map_or(1.0, |c| c.1);
     32.0 * f.section.bound_radius_um() * s
-}
-
-/// The symmetry a set of sections shares.
-pub fn entry_symmetry(e: &FiberEntry, fibers: &[Fiber], res_deg: f64) -> Symmetry {
-    if e.symmetry == SymmetryMode::None {
-        return Symmetry::NONE;
-    }
-    let mut sym = symmetry::detect(&fibers[0], res_deg);
-    for f in &fibers[1..] {
-        sym = sym.common(&symmetry::detect(f, res_deg));
-    }
-    sym
 }
 
 /// One table being written: streaming file and HDF5 group.
@@ -206,17 +209,15 @@ pub struct EntrySetup {
     pub key_base: [u8; 32],
 }
 
-pub fn entry_setup(
-    spec: &FiberSpec,
-    e: &FiberEntry,
-    st: &BakeSettings,
-) -> anyhow::Result<EntrySetup> {
+/// The setup of entry `e` from what the resolver built (its sections and symmetries).
+pub fn entry_setup(e: &FiberEntry, st: &BakeSettings) -> anyhow::Result<EntrySetup> {
     let grid = AngularGrid::new(st.res_deg).map_err(anyhow::Error::msg)?;
-    let fibers: Vec<Fiber> = (0..e.sections)
-        .map(|s| e.section_variant(s).map(|sec| e.fiber_with(sec)))
-        .collect::<Result<_, _>>()
-        .map_err(|m| anyhow::anyhow!("{}:{}: entry {}: {m}", spec.file, e.line, e.name))?;
-    let sym = entry_symmetry(e, &fibers, st.res_deg);
+    let fibers: Vec<Fiber> = e
+        .population
+        .iter()
+        .map(|s| e.fiber_with(s.clone()))
+        .collect();
+    let sym = e.symmetries;
     let (stored, map) = sym.wi_map(grid.n_theta, grid.n_phi, st.res_deg);
     let variants = variants_of(e, &st.lambda_nm);
     let channels = Channels::new(
@@ -243,14 +244,13 @@ pub fn entry_setup(
 
 /// `baker plan`: the entry's units, numbered from `*unit_index`.
 pub fn plan_entry(
-    spec: &FiberSpec,
     stem: &str,
     e: &FiberEntry,
     st: &BakeSettings,
     cache: &crate::pipeline::Cache,
     unit_index: &mut usize,
 ) -> anyhow::Result<Vec<crate::pipeline::UnitInfo>> {
-    let setup = entry_setup(spec, e, st)?;
+    let setup = entry_setup(e, st)?;
     let n_wi = setup.stored.len();
     let all: Vec<usize> = (0..n_wi).collect();
     let mut out = Vec::new();
@@ -276,12 +276,6 @@ type EntryOutputs = (EntryReport, Vec<(String, String)>);
 struct UnitCtx<'a> {
     runner: &'a Runner,
     prefix: String,
-}
-
-/// Stored incoming directions per work unit: a function of their number only, so the units
-/// (and shards) do not depend on the machine.
-pub fn unit_len(n_wi: usize) -> usize {
-    n_wi.div_ceil(48).max(4)
 }
 
 /// Id (`<spec>/<entry>/wi<first>-<last>`) and key of the unit of stored directions `chunk`.
@@ -327,15 +321,23 @@ fn unit_results(
                 (0..fibers.len())
                     .map(|s| {
                         let seed = task_seed(st.seed, &[seed_base, s as u64, b as u64]);
-                        let r = bake::trace_slice(&fibers[s], inc, grid, channels, st, seed);
+                        let r = bake::trace_slice(
+                            &fibers[s],
+                            inc,
+                            grid,
+                            channels,
+                            st,
+                            seed,
+                            &ctx.runner.cancel,
+                        );
                         if let Some(bar) = bar {
                             bar.inc(1);
                         }
                         r
                     })
-                    .collect::<Vec<_>>()
+                    .collect::<Result<Vec<_>, _>>()
             })
-            .collect::<Vec<_>>())
+            .collect::<Result<Vec<_>, _>>()?)
     })?;
     Ok(r)
 }
@@ -343,7 +345,7 @@ fn unit_results(
 #[allow(clippy::too_many_arguments)]
 fn bake_entry(
     a: &BakeArgs,
-    dir: &Path,
+    out: Option<&Destination>,
     spec: &FiberSpec,
     e: &FiberEntry,
     st: &BakeSettings,
@@ -351,7 +353,7 @@ fn bake_entry(
     unit_index: &mut usize,
 ) -> anyhow::Result<Option<EntryOutputs>> {
     let t0 = Instant::now();
-    let spec_sha = crate::output::manifest::spec_sha256(&spec.file);
+    let spec_sha = spec.sha256.clone();
     let EntrySetup {
         grid,
         fibers,
@@ -362,7 +364,7 @@ fn bake_entry(
         channels,
         seed_base,
         key_base,
-    } = entry_setup(spec, e, st)?;
+    } = entry_setup(e, st)?;
     let (nv, nc) = (variants.len(), channels.per_variant());
     let ns = fibers.len();
     let n_tables = if ns > 1 { ns + 1 } else { ns };
@@ -384,9 +386,6 @@ fn bake_entry(
             nc
         );
     }
-    let edir = dir.join(&e.name);
-    std::fs::create_dir_all(&edir).with_context(|| format!("creating {}", edir.display()))?;
-    let h5_path = edir.join(format!("{}.h5", e.name));
     let wi_deg: Vec<[f64; 2]> = stored
         .iter()
         .map(|&b| {
@@ -419,7 +418,7 @@ fn bake_entry(
     let first_unit = *unit_index;
     *unit_index += n_wi.div_ceil(ulen);
     let all: Vec<usize> = (0..n_wi).collect();
-    if a.shard.is_some() {
+    let Some(d) = out else {
         // A shard traces its units into the cache; `baker merge` writes the tables.
         for (u, chunk) in all.chunks(ulen).enumerate() {
             unit_results(
@@ -437,7 +436,9 @@ fn bake_entry(
             )?;
         }
         return Ok(None);
-    }
+    };
+    let dir = d.staged.dir();
+    let h5_path = d.staged.path(&format!("{0}/{0}.h5", e.name))?;
 
     let mut tables: Vec<Option<(String, Vec<u8>)>> = vec![None; n_tables];
     let bcsdf_bytes = std::cell::Cell::new(0u64);
@@ -687,7 +688,9 @@ fn bake_entry(
     };
     let mut first_table: Option<PathBuf> = None;
     for (name, bytes) in tables.into_iter().flatten() {
-        let p = edir.join(format!("{name}.{}", bcsdf::EXTENSION));
+        let p = d
+            .staged
+            .path(&format!("{}/{name}.{}", e.name, bcsdf::EXTENSION))?;
         atomic::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
         files.push((rel(&p), format!("BCSDF table {name} of {}", e.name)));
         if first_table.is_none() || name == "average" {
@@ -695,7 +698,13 @@ fn bake_entry(
         }
     }
     files.push((rel(&h5_path), format!("HDF5 tables of {}", e.name)));
-    let previews = write_previews(dir, &e.name, first_table.as_deref().unwrap(), &st.lambda_nm)?;
+    ctx.runner.cancel.check()?;
+    let previews = write_previews(
+        &d.staged,
+        &e.name,
+        first_table.as_deref().unwrap(),
+        &st.lambda_nm,
+    )?;
     for p in previews {
         files.push((rel(&p), format!("preview slices of {}", e.name)));
     }
@@ -754,7 +763,7 @@ const PREVIEW_PHI: [f64; 4] = [0.0, 30.0, 60.0, 90.0];
 /// Preview grid from a written table (read back through the renderer's reader): PNG of the
 /// mean-channel f on a log scale, EXR of linear RGB f (variant 0).
 fn write_previews(
-    dir: &Path,
+    out: &Staged,
     entry: &str,
     table: &Path,
     lambda_nm: &[f64],
@@ -791,8 +800,7 @@ fn write_previews(
             rgb_panels.push(rgb);
         }
     }
-    let pdir = dir.join("preview");
-    let png = pdir.join(format!("{entry}.png"));
+    let png = out.path(&format!("preview/{entry}.png"))?;
     let px = (4.0 * 2.0 / res).round().max(1.0) as u32;
     slice::write_panels_png(&png, nt, np, &panels, PREVIEW_PHI.len(), px)?;
     // EXR: same grid, one pixel per bin, θo increasing downwards reversed like the PNG.
@@ -810,7 +818,7 @@ fn write_previews(
             }
         }
     }
-    let exr_path = pdir.join(format!("{entry}.exr"));
+    let exr_path = out.path(&format!("preview/{entry}.exr"))?;
     exr::write_rgb(
         &exr_path,
         w,

@@ -30,14 +30,7 @@ pub fn reference_stack() -> anyhow::Result<Stack> {
         1.0,
     );
     let o = skin::evaluate(&p, &WavelengthGrid::from_list(vec![550.0]))?;
-    let mut doc_entry = crate::output::document::entry(
-        &crate::spec::ResolvedEntry {
-            name: "bench".into(),
-            line: 0,
-            params: p,
-        },
-        &o,
-    );
+    let mut doc_entry = crate::skin::document::entry("bench", &p, &o);
     doc_entry.model = "five_layer".into();
     Ok(transport::stack::from_skin(&doc_entry, 0))
 }

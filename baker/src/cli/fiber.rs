@@ -196,8 +196,11 @@ fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
             .scaled_to_diameter(diameter.unwrap_or(10.0))?
         }
         "polygon" => {
-            let sec =
-                Section::from_csv(std::path::Path::new(rest)).map_err(|e| usage(e.to_string()))?;
+            let sec = Section::from_csv(
+                std::path::Path::new(rest),
+                crate::spec::Limits::default().polygon_vertices,
+            )
+            .map_err(|e| usage(e.to_string()))?;
             match diameter {
                 Some(d) => sec.scaled_to_diameter(d)?,
                 None => sec,

@@ -8,7 +8,6 @@ use clap::Args;
 
 use super::{load_spec, UsageError};
 use crate::output::{self, atomic, mci::MciRun, plot::Quantity};
-use crate::skin;
 use crate::spec::SkinSpec;
 
 #[derive(Debug, Args)]
@@ -58,15 +57,7 @@ pub fn evaluate_entries(
         ))
         .into());
     }
-    selected
-        .into_iter()
-        .map(|e| {
-            let o = skin::evaluate(&e.params, &spec.wavelengths).map_err(|err| {
-                UsageError(format!("{}:{}: entry {}: {err}", spec.file, e.line, e.name))
-            })?;
-            Ok(output::document::entry(e, &o))
-        })
-        .collect()
+    super::bake::skin_optics(spec, |e| only.is_none_or(|n| e.name == n))
 }
 
 pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
@@ -107,7 +98,7 @@ pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
         wrote_files = true;
     }
     if a.json {
-        let doc = output::document::document(&spec.file, lam, entries);
+        let doc = crate::skin::document::document(&spec.file, lam, entries);
         outln!("{}", serde_json::to_string_pretty(&doc)?)?;
     } else if !wrote_files {
         out!("{}", text_report(lam, &entries))?;

@@ -10,6 +10,7 @@ use clap::{Args, Subcommand};
 
 use super::bake::BakeArgs;
 use crate::output::atomic;
+use crate::output::paths::OutRoot;
 use crate::pipeline::{interrupt, Key, Runner};
 
 /// Exit code of a bake stopped by SIGINT/SIGTERM (128 + SIGINT, the shell convention).
@@ -31,12 +32,16 @@ pub struct ShardManifest {
     pub optics_only: bool,
     #[serde(default)]
     pub plots: bool,
+    #[serde(default)]
+    pub replace: bool,
     /// Units this shard holds (computed or found in its cache): id and key.
     pub units: Vec<(String, String)>,
 }
 
-/// Ends a bake: on success the shard manifest (with `--shard`), the cache roots and the
-/// summary event; on a signal, the `interrupted` event and how to resume.
+/// Ends a bake: on success the shard manifest and its cache roots (with `--shard`) and the
+/// summary event; on a signal, the `interrupted` event and how to resume. The roots of each
+/// finished output were recorded when it was put in place ([`write_roots`]); a bake that was
+/// up to date or failed changes none.
 pub fn finish(
     a: &BakeArgs,
     runner: &Runner,
@@ -56,8 +61,8 @@ pub fn finish(
                 "units_computed": computed, "resume": resume}));
             if !a.quiet {
                 eprintln!(
-                    "interrupted: {computed} work units finished and cached; run the same \
-                     command again to resume:\n  {resume}"
+                    "interrupted: {computed} work units finished and cached; finished outputs \
+                     are unchanged; run the same command again to resume:\n  {resume}"
                 );
             }
             return Err(e);
@@ -73,18 +78,11 @@ pub fn finish(
         );
         return Err(e);
     }
-    // Roots for `baker cache gc`: the keys the last bake of each spec used.
-    if runner.cache.mode != crate::pipeline::CacheMode::Off {
-        let name = match a.shard {
-            Some(s) => format!("{}-shard{}of{}", stems.join("+"), s.index, s.count),
-            None => stems.join("+"),
-        };
-        let p = runner.cache.dir.join("roots").join(format!("{name}.json"));
-        let keys: Vec<String> = used.iter().map(|(_, k)| k.hex()).collect();
-        atomic::write(&p, serde_json::to_string(&keys)?.as_bytes())
-            .with_context(|| format!("writing {}", p.display()))?;
-    }
     if let Some(s) = a.shard {
+        let root = crate::output::paths::OutRoot::open(&a.out)?;
+        let name = format!("{}-shard{}of{}", stems.join("+"), s.index, s.count);
+        let keys: Vec<Key> = used.iter().map(|(_, k)| *k).collect();
+        write_roots(runner, &root, &name, &keys)?;
         let specs = a
             .specs
             .iter()
@@ -106,10 +104,11 @@ pub fn finish(
             no_reuse: a.no_reuse,
             optics_only: a.optics_only,
             plots: a.plots,
+            replace: a.replace,
             given: a.specs.clone(),
             units: used.iter().map(|(id, k)| (id.clone(), k.hex())).collect(),
         };
-        let p = a.out.join("shard.json");
+        let p = root.join("shard.json")?;
         atomic::write(&p, serde_json::to_string_pretty(&m)?.as_bytes())
             .with_context(|| format!("writing {}", p.display()))?;
     }
@@ -126,6 +125,32 @@ pub fn finish(
         );
     }
     Ok(())
+}
+
+/// Records `keys` as the units output `name` of `root` needs (`roots/<name>-<id>.json` in the
+/// cache; `<id>` tells apart outputs of the same name in different output folders sharing a
+/// cache). [`cache`] `gc` keeps every unit any roots file names.
+pub fn write_roots(
+    runner: &Runner,
+    root: &OutRoot,
+    name: &str,
+    keys: &[Key],
+) -> anyhow::Result<()> {
+    if runner.cache.mode == crate::pipeline::CacheMode::Off {
+        return Ok(());
+    }
+    let out_id = crate::pipeline::digest_of(&root.canonical().join(name));
+    let file = format!(
+        "{}-{}.json",
+        name.replace('/', "+"),
+        &Key(out_id).hex()[..12]
+    );
+    let p = runner.cache.dir.join("roots").join(file);
+    let mut hex: Vec<String> = keys.iter().map(Key::hex).collect();
+    hex.sort();
+    hex.dedup();
+    atomic::write(&p, serde_json::to_string(&hex)?.as_bytes())
+        .with_context(|| format!("writing {}", p.display()))
 }
 
 #[derive(Debug, Args)]
@@ -239,6 +264,7 @@ pub fn merge(m: MergeArgs) -> anyhow::Result<()> {
         optics_only: f.optics_only,
         no_reuse: f.no_reuse,
         plots: f.plots,
+        replace: f.replace,
         progress: m.progress,
         shard: None,
         force: false,
@@ -264,31 +290,52 @@ pub struct PlanArgs {
     pub entries: Vec<String>,
     #[arg(long)]
     pub no_reuse: bool,
+    /// Worker threads the bake will run (for the memory bound; default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
 }
 
-/// `baker plan`: the work units of the specs, their cost and whether they are cached.
+/// `baker plan`: the work units of the specs, their cost and whether they are cached, and
+/// what each bake will cost (photons, the memory bound) against the spec's limits.
 pub fn plan(p: PlanArgs) -> anyhow::Result<()> {
     let cache = crate::pipeline::Cache::new(
         p.cache.clone().unwrap_or_else(|| p.out.join(".cache")),
         crate::pipeline::CacheMode::Use,
     );
+    let o = crate::spec::budget::Overrides {
+        photons: p.photons,
+        threads: p.threads.unwrap_or_else(rayon::current_num_threads).max(1),
+        no_reuse: p.no_reuse,
+        optics_only: false,
+    };
     let mut units = Vec::new();
+    let mut costs = Vec::new();
     for path in &p.specs {
+        let (spec, cost) = super::bake::load_checked(path, &o)?;
+        let stem = super::bake::spec_stem(path)?;
         units.extend(super::bake::plan_units(
-            path, &p.entries, p.photons, p.no_reuse, &cache,
+            &spec, &stem, &p.entries, p.photons, p.no_reuse, &cache,
         )?);
+        costs.push((path.clone(), cost, *spec.limits()));
     }
     let cached = units.iter().filter(|u| u.cached).count();
     let photons: u64 = units.iter().filter(|u| !u.cached).map(|u| u.photons).sum();
     if p.json {
+        let budgets: Vec<serde_json::Value> = costs
+            .iter()
+            .map(|(path, c, l)| {
+                serde_json::json!({"spec": path, "photons_max": c.photons,
+                    "memory_bytes_max": c.memory_bytes, "threads": o.threads, "limits": l})
+            })
+            .collect();
         outln!(
             "{}",
             serde_json::to_string_pretty(&serde_json::json!({
                 "units": units, "total": units.len(), "cached": cached,
-                "photons_to_trace": photons, "cache": cache.dir,
+                "photons_to_trace": photons, "cache": cache.dir, "budget": budgets,
             }))?
         )?;
         return Ok(());
@@ -314,6 +361,16 @@ pub fn plan(p: PlanArgs) -> anyhow::Result<()> {
         units.len(),
         cache.dir.display()
     )?;
+    for (path, c, l) in &costs {
+        outln!(
+            "{}: at most {} on {} thread(s) (limits: {:.3e} photons, {} GiB)",
+            path.display(),
+            c.describe(),
+            o.threads,
+            l.photons,
+            l.memory_gib
+        )?;
+    }
     Ok(())
 }
 
@@ -341,15 +398,7 @@ pub fn cache(c: CacheCommand) -> anyhow::Result<()> {
         } => {
             let dir = cache.unwrap_or_else(|| out.join(".cache"));
             let c = crate::pipeline::Cache::new(&dir, crate::pipeline::CacheMode::Use);
-            let mut live = std::collections::BTreeSet::new();
-            if let Ok(rd) = std::fs::read_dir(dir.join("roots")) {
-                for f in rd.flatten() {
-                    let text = std::fs::read_to_string(f.path())?;
-                    let keys: Vec<String> = serde_json::from_str(&text)
-                        .with_context(|| format!("{}: invalid roots file", f.path().display()))?;
-                    live.extend(keys.iter().filter_map(|k| Key::from_hex(k)));
-                }
-            }
+            let live = live_units(&dir, &out)?;
             let (mut n, mut bytes) = (0usize, 0u64);
             for (k, p) in c.list() {
                 if !live.contains(&k) {
@@ -372,17 +421,49 @@ pub fn cache(c: CacheCommand) -> anyhow::Result<()> {
     }
 }
 
+/// Every unit something still needs: the keys of every roots file in the cache, of every
+/// manifest under `out` (each spec's folder and its subset folder) and of every shard
+/// manifest there.
+pub fn live_units(cache_dir: &Path, out: &Path) -> anyhow::Result<std::collections::BTreeSet<Key>> {
+    let mut live = std::collections::BTreeSet::new();
+    let read = |p: &Path| {
+        crate::files::read_text(p, crate::files::MAX_SPEC_BYTES, "a cache roots file")
+            .map_err(anyhow::Error::from)
+    };
+    if let Ok(rd) = std::fs::read_dir(cache_dir.join("roots")) {
+        for f in rd.flatten() {
+            let keys: Vec<String> = serde_json::from_str(&read(&f.path())?)
+                .with_context(|| format!("{}: invalid roots file", f.path().display()))?;
+            live.extend(keys.iter().filter_map(|k| Key::from_hex(k)));
+        }
+    }
+    if let Ok(rd) = std::fs::read_dir(out) {
+        for d in rd.flatten().filter(|d| d.path().is_dir()) {
+            for dir in [d.path(), d.path().join(super::bake::SUBSET_DIR)] {
+                if let Some(m) = super::bake::manifest_summary(&dir) {
+                    live.extend(m.units.iter().filter_map(|k| Key::from_hex(k)));
+                }
+            }
+        }
+    }
+    if let Ok(text) = read(&out.join("shard.json")) {
+        if let Ok(m) = serde_json::from_str::<ShardManifest>(&text) {
+            live.extend(m.units.iter().filter_map(|(_, k)| Key::from_hex(k)));
+        }
+    }
+    Ok(live)
+}
+
 fn remove(p: &Path) -> anyhow::Result<()> {
     std::fs::remove_file(p).with_context(|| format!("deleting {}", p.display()))
 }
 
-/// The file in a spec's output directory that records what produced it (see [`stamp`]).
-pub const STAMP_FILE: &str = ".baked";
+use crate::output::STAMP_FILE;
 
-/// What determines a spec's outputs: the spec's bytes, this executable's bytes (code and data
-/// tables), the engine version and the flags that change outputs. Equal stamps and intact
-/// files (checked against the manifest's SHA-256) make a bake a no-op.
-pub fn stamp(a: &BakeArgs, spec: &Path) -> anyhow::Result<String> {
+/// What determines a spec's outputs: the spec's bytes (`spec_sha256`), this executable's bytes
+/// (code and data tables), the engine version and the flags that change outputs. Equal stamps
+/// and intact files (checked against the manifest's SHA-256) make a bake a no-op.
+pub fn stamp(a: &BakeArgs, spec: &Path, spec_sha256: &str) -> String {
     static EXE: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     let exe = EXE.get_or_init(|| {
         std::env::current_exe()
@@ -392,9 +473,8 @@ pub fn stamp(a: &BakeArgs, spec: &Path) -> anyhow::Result<String> {
             .map(|d| sha_hex(&d))
             .unwrap_or_default()
     });
-    let spec_bytes = std::fs::read(spec).with_context(|| format!("reading {}", spec.display()))?;
-    Ok(sha_hex(&crate::pipeline::digest_of(&(
-        sha_hex(&spec_bytes),
+    sha_hex(&crate::pipeline::digest_of(&(
+        spec_sha256,
         spec,
         exe,
         crate::pipeline::ENGINE_VERSION,
@@ -403,7 +483,7 @@ pub fn stamp(a: &BakeArgs, spec: &Path) -> anyhow::Result<String> {
         a.no_reuse,
         a.optics_only,
         a.plots,
-    ))))
+    )))
 }
 
 fn sha_hex(b: &[u8]) -> String {
@@ -416,6 +496,11 @@ fn sha_hex(b: &[u8]) -> String {
 
 /// Whether `dir` holds the outputs of `stamp`, every file of its manifest intact.
 pub fn up_to_date(dir: &Path, stamp: &str) -> bool {
+    // Only regular files count (a FIFO or device planted there is not an output).
+    let regular = |p: &Path| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_file());
+    if !regular(&dir.join(STAMP_FILE)) || !regular(&dir.join("manifest.json")) {
+        return false;
+    }
     let Ok(s) = std::fs::read_to_string(dir.join(STAMP_FILE)) else {
         return false;
     };
@@ -435,7 +520,10 @@ pub fn up_to_date(dir: &Path, stamp: &str) -> bool {
         let (Some(rel), Some(sha)) = (f["path"].as_str(), f["sha256"].as_str()) else {
             return false;
         };
-        std::fs::read(dir.join(rel)).is_ok_and(|b| sha_hex(&b) == sha)
+        rel.split('/')
+            .all(|c| crate::output::paths::check_component(c, false).is_ok())
+            && regular(&dir.join(rel))
+            && std::fs::read(dir.join(rel)).is_ok_and(|b| sha_hex(&b) == sha)
     })
 }
 

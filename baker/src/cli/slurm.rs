@@ -79,13 +79,8 @@ const RESERVED_BAKE_FLAGS: [&str; 5] = ["--out", "--shard", "--threads", "--prog
 pub fn run(a: SlurmArgs) -> anyhow::Result<()> {
     // Everything a shard would reject is rejected here, before anything is queued.
     for spec in &a.specs {
-        let text = std::fs::read_to_string(spec).unwrap_or_default();
-        if crate::spec::fiber::is_fiber_spec(&text) {
-            crate::spec::fiber::load(spec)
-                .map_err(|e| UsageError(e.to_string().trim_end().to_string()))?;
-        } else {
-            super::load_spec(spec)?;
-        }
+        super::bake::load_checked(spec, &crate::spec::budget::Overrides::none())?;
+        super::bake::spec_stem(spec)?;
     }
     check_bake_args(&a.specs, &a.bake_args)?;
 

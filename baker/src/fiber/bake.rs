@@ -22,6 +22,7 @@ use super::sweep::{ChannelKind, Channels};
 use super::tally::AngularGrid;
 use super::tracer::Setup;
 use super::{Fiber, Incident};
+use crate::cancel::{Cancel, Cancelled};
 use crate::transport::rng::{batch_rng, uniform};
 use formats::Precision;
 use rand_core::Rng;
@@ -59,6 +60,16 @@ impl Default for BakeSettings {
             channels: ChannelKind::Rgb,
             lambda_nm: (0..31).map(|i| 400.0 + 10.0 * i as f64).collect(),
             zstd_level: 9,
+        }
+    }
+}
+
+impl BakeSettings {
+    /// Channels per dye variant: 3 (RGB) or one per wavelength of `lambda_nm` (spectral).
+    pub fn channels_per_variant(&self) -> usize {
+        match self.channels {
+            ChannelKind::Rgb => 3,
+            ChannelKind::Spectral => self.lambda_nm.len(),
         }
     }
 }
@@ -137,11 +148,18 @@ pub fn incident_of_bin(grid: &AngularGrid, it: usize, jp: usize) -> Incident {
     .with_spread_deg(r, r)
 }
 
+/// Stored incoming directions per work unit of a bake: a function of their number only, so
+/// the units (and shards) do not depend on the machine.
+pub fn unit_len(n_wi: usize) -> usize {
+    n_wi.div_ceil(48).max(4)
+}
+
 /// Batches traced before their tallies are merged (bounds memory for wide sweeps).
 const GROUP: u64 = 16;
 
 /// Traces one incoming bin for every channel. Deterministic for a given seed whatever the
-/// thread count (batches are merged in order).
+/// thread count (batches are merged in order). `cancel` is checked before every group of
+/// batches.
 pub fn trace_slice(
     fiber: &Fiber,
     inc: Incident,
@@ -149,7 +167,8 @@ pub fn trace_slice(
     channels: &Channels,
     s: &BakeSettings,
     seed: u64,
-) -> SliceResult {
+    cancel: &Cancel,
+) -> Result<SliceResult, Cancelled> {
     let start = Instant::now();
     let setup = Setup::new(fiber, inc);
     let nch = channels.len();
@@ -162,6 +181,7 @@ pub fn trace_slice(
     let (mut hits, mut lost, mut used, mut gtot) = (0u64, 0.0, 0u64, 0.0);
     let mut b0 = 0;
     while b0 < nb {
+        cancel.check()?;
         let b1 = (b0 + GROUP).min(nb);
         let parts: Vec<(Vec<f64>, u64, f64, f64)> = (b0..b1)
             .into_par_iter()
@@ -253,7 +273,7 @@ pub fn trace_slice(
             rel[((rel.len() - 1) as f64 * p).round() as usize]
         }
     };
-    SliceResult {
+    Ok(SliceResult {
         fraction,
         albedo,
         albedo_se,
@@ -266,5 +286,5 @@ pub fn trace_slice(
         intercepted: hits,
         lost_weight: lost,
         seconds: start.elapsed().as_secs_f64(),
-    }
+    })
 }

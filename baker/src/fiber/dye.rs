@@ -190,7 +190,8 @@ pub fn presets() -> Vec<Dye> {
 /// Reads a tabulated spectrum: rows `lambda_nm,eps_l_per_mg_cm`, `#` comments and one header
 /// row allowed, wavelengths strictly increasing, ε ≥ 0.
 pub fn spectrum_from_csv(path: &Path) -> Result<Spectrum, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let text = crate::files::read_text(path, crate::files::MAX_DATA_BYTES, "a dye spectrum CSV")
+        .map_err(|e| e.to_string())?;
     let (mut l, mut e) = (Vec::new(), Vec::new());
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();

@@ -80,6 +80,11 @@ impl Symmetry {
         }
     }
 
+    /// How many incoming bins a table stores on an `n_theta × n_phi` grid.
+    pub fn stored_count(&self, n_theta: usize, n_phi: usize, res_deg: f64) -> usize {
+        self.wi_map(n_theta, n_phi, res_deg).0.len()
+    }
+
     /// Maps the full grid of incoming bins (`n_theta × n_phi`, θ row-major) to stored ones:
     /// returns the stored bins (full-grid indices, ascending) and, per full bin, the stored
     /// index with [`FLIP_THETA`] / [`FLIP_DPHI`] flags (the `.bcsdf` `wi_map`).

@@ -16,6 +16,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::nnls::nnls_normal;
+use crate::cancel::{Cancel, Cancelled};
 
 /// Energy of G(v, ·) in the annulus [a, b] (its integral over the annulus, mm² cancel).
 #[inline]
@@ -31,6 +32,8 @@ pub struct FitOptions {
     pub max_evaluations: usize,
     /// Restarts after the first run (each from the best point so far).
     pub restarts: usize,
+    /// Checked between simplex runs (each at most `max_evaluations` evaluations).
+    pub cancel: Cancel,
 }
 
 impl Default for FitOptions {
@@ -39,6 +42,7 @@ impl Default for FitOptions {
             count: 6,
             max_evaluations: 2500,
             restarts: 4,
+            cancel: Cancel::NEVER,
         }
     }
 }
@@ -181,15 +185,18 @@ fn nelder_mead(
 }
 
 /// Phase 1 on the smooth least-squares surrogate, phase 2 on the L1 error itself, from `x0`.
-fn optimise(p: &Problem, x0: &[f64], o: &FitOptions) -> (Vec<f64>, f64) {
+fn optimise(p: &Problem, x0: &[f64], o: &FitOptions) -> Result<(Vec<f64>, f64), Cancelled> {
     let f2 = |x: &[f64]| p.evaluate_l2(x);
     let (mut x, _) = nelder_mead(&f2, x0, 0.7, o.max_evaluations);
     for _ in 0..o.restarts {
+        o.cancel.check()?;
         x = nelder_mead(&f2, &x, 0.3, o.max_evaluations).0;
     }
     let f = |x: &[f64]| p.evaluate(x).0;
+    o.cancel.check()?;
     let (mut x, mut fx) = nelder_mead(&f, &x, 0.3, o.max_evaluations);
     for k in 0..o.restarts {
+        o.cancel.check()?;
         let step = if k % 2 == 0 { 0.3 } else { 0.8 };
         let (x2, f2) = nelder_mead(&f, &x, step, o.max_evaluations);
         let improved = f2 < fx * (1.0 - 1e-4);
@@ -200,17 +207,18 @@ fn optimise(p: &Problem, x0: &[f64], o: &FitOptions) -> (Vec<f64>, f64) {
             break;
         }
     }
-    (x, fx)
+    Ok((x, fx))
 }
 
 /// Fits `table` (bin averages per unit area, `[nr][3]`, on annuli `edges_mm`) inside each
-/// channel's 99 % radius `r99_mm`, with `o.count` shared variances.
+/// channel's 99 % radius `r99_mm`, with `o.count` shared variances; `Err` once `o.cancel` is
+/// set.
 pub fn fit_sum_of_gaussians(
     edges_mm: &[f64],
     table: &[[f64; 3]],
     r99_mm: [f64; 3],
     o: &FitOptions,
-) -> GaussianFit {
+) -> Result<GaussianFit, Cancelled> {
     assert_eq!(edges_mm.len(), table.len() + 1, "one more edge than bins");
     assert!(o.count >= 1);
     let channels = (0..3)
@@ -251,18 +259,18 @@ pub fn fit_sum_of_gaussians(
             }
         })
         .collect();
-    let (x, _) = optimise(&p, &x0, o);
+    let (x, _) = optimise(&p, &x0, o)?;
     let (_, ws, errs) = p.evaluate(&x);
     let mut order: Vec<usize> = (0..o.count).collect();
     order.sort_by(|&a, &b| x[a].total_cmp(&x[b]));
-    GaussianFit {
+    Ok(GaussianFit {
         variance_mm2: order.iter().map(|&i| x[i].exp()).collect(),
         weight_rgb: order
             .iter()
             .map(|&i| [ws[0][i], ws[1][i], ws[2][i]])
             .collect(),
         error_rgb: errs,
-    }
+    })
 }
 
 /// The energy-weighted error of a given fit against `table` (the same formula the fit
@@ -343,7 +351,8 @@ mod tests {
             &table,
             [12.0, 3.0, 2.0],
             &FitOptions::default(),
-        );
+        )
+        .unwrap();
         for c in 0..3 {
             assert!(fit.error_rgb[c] < 2e-3, "channel {c}: {:?}", fit.error_rgb);
         }
@@ -372,9 +381,17 @@ mod tests {
         let bins = RadialBins::fine_then_log(0.01, 1.06, 15.0);
         let table = table_of(bins.edges_mm(), &v, &w);
         let o = FitOptions::default();
-        let a = fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &o);
-        let b = fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &o);
+        let a = fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &o).unwrap();
+        let b = fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &o).unwrap();
         assert_eq!(a, b);
+        // A set flag stops the fit.
+        let (flag, cancel) = Cancel::fresh();
+        flag.store(true, std::sync::atomic::Ordering::Relaxed);
+        let stopped = FitOptions { cancel, ..o };
+        assert_eq!(
+            fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &stopped),
+            Err(Cancelled)
+        );
         assert!(a.weight_rgb.iter().flatten().all(|&x| x >= 0.0));
         assert!(a.variance_mm2.windows(2).all(|p| p[0] <= p[1]));
     }

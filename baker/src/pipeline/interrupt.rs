@@ -1,7 +1,12 @@
-//! SIGINT/SIGTERM: the first signal asks the bake to stop after the units that are running
-//! (their results are cached, so the next run resumes); a second one exits at once.
+//! SIGINT/SIGTERM: the first signal sets the process's [`Cancel`] flag, so running units stop
+//! at their next photon batch (they are not cached; finished units are) and the bake exits
+//! with 130; a second signal exits at once. Schedulers (Slurm, Kubernetes, CI) send SIGTERM and
+//! then SIGKILL after a grace period of seconds: the bake is gone well within it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::cancel::Cancel;
+pub use crate::cancel::Cancelled as Interrupted;
 
 static REQUESTED: AtomicBool = AtomicBool::new(false);
 /// Set with `--progress json|none` or `--quiet`: the handler writes nothing (the bake emits
@@ -11,11 +16,6 @@ static SILENT: AtomicBool = AtomicBool::new(false);
 pub fn set_silent(silent: bool) {
     SILENT.store(silent, Ordering::SeqCst);
 }
-
-/// The error a bake returns when it stopped on a signal (exit code 130).
-#[derive(Debug, thiserror::Error)]
-#[error("interrupted")]
-pub struct Interrupted;
 
 /// Installs the handler (once per process; later calls do nothing).
 pub fn install() {
@@ -31,11 +31,16 @@ pub fn install() {
             }
             if !silent {
                 eprintln!(
-                    "\ninterrupt: finishing the running units (press Ctrl-C again to stop now)"
+                    "\ninterrupt: stopping at the next batch (press Ctrl-C again to stop now)"
                 );
             }
         });
     });
+}
+
+/// The flag the handler sets, as a token for the work it should stop.
+pub fn cancel() -> Cancel {
+    Cancel::new(&REQUESTED)
 }
 
 pub fn requested() -> bool {

@@ -187,6 +187,8 @@ pub struct Runner {
     pub hits: std::sync::atomic::AtomicUsize,
     /// Keys used (for `baker cache gc` roots and shard manifests).
     pub used: std::sync::Mutex<Vec<(String, Key)>>,
+    /// Stops units at their next batch (SIGINT/SIGTERM in a bake).
+    pub cancel: crate::cancel::Cancel,
 }
 
 impl Runner {
@@ -199,6 +201,7 @@ impl Runner {
             computed: Default::default(),
             hits: Default::default(),
             used: Default::default(),
+            cancel: crate::cancel::Cancel::NEVER,
         }
     }
 
@@ -238,12 +241,18 @@ impl Runner {
         if !self.owns(index) {
             return Ok(None);
         }
-        if interrupt::requested() {
+        if self.cancel.is_set() {
             return Err(UnitError::Interrupted);
         }
         self.events.unit_started(id, &key);
         let t0 = std::time::Instant::now();
-        let v = compute().map_err(UnitError::Failed)?;
+        let v = compute().map_err(|e| {
+            if e.is::<crate::cancel::Cancelled>() {
+                UnitError::Interrupted
+            } else {
+                UnitError::Failed(e)
+            }
+        })?;
         self.cache
             .store(&key, &v)
             .map_err(|e| UnitError::Failed(e.context(format!("caching unit {id}"))))?;

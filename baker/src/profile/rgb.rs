@@ -1,6 +1,7 @@
 //! Spectral profile → linear sRGB profile, 99 % radii and the sum-of-Gaussians fit.
 
 use super::simulate::SpectralProfile;
+use crate::cancel::{Cancel, Cancelled};
 use crate::fit::{fit_sum_of_gaussians, FitOptions, GaussianFit};
 use crate::spectral::ColourMap;
 
@@ -35,7 +36,13 @@ pub fn radius_of_energy(edges_mm: &[f64], rd: impl Iterator<Item = f64>, target:
     f64::NAN
 }
 
-pub fn rgb_profile(p: &SpectralProfile, colour: &ColourMap, gaussians: usize) -> RgbProfile {
+/// The RGB profile of `p` and its sum-of-`gaussians` fit; `Err` once `cancel` is set.
+pub fn rgb_profile(
+    p: &SpectralProfile,
+    colour: &ColourMap,
+    gaussians: usize,
+    cancel: Cancel,
+) -> Result<RgbProfile, Cancelled> {
     let nr = p.r_edges_mm.len() - 1;
     let w = &colour.rgb_weights;
     let rd_rgb: Vec<[f64; 3]> = (0..nr)
@@ -63,10 +70,11 @@ pub fn rgb_profile(p: &SpectralProfile, colour: &ColourMap, gaussians: usize) ->
         r_fit,
         &FitOptions {
             count: gaussians,
+            cancel,
             ..FitOptions::default()
         },
-    );
-    RgbProfile {
+    )?;
+    Ok(RgbProfile {
         xyz: colour.xyz(&p.rd_total),
         albedo_rgb,
         albedo_rgb_se: colour.rgb_se(&p.rd_total_se),
@@ -74,5 +82,5 @@ pub fn rgb_profile(p: &SpectralProfile, colour: &ColourMap, gaussians: usize) ->
         rd_rgb_per_mm2_se: rd_rgb_se,
         r99_mm,
         fit,
-    }
+    })
 }

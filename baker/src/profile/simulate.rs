@@ -7,6 +7,8 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
+use anyhow::Context as _;
+
 use formats::OpticsEntry;
 
 use crate::pipeline::{Cache, CacheMode, Events, Key, KeyBuilder, ProgressMode, Runner};
@@ -306,15 +308,12 @@ pub fn simulate_units(
                 let mut mo = McOptions::new(n_main, task_seed(o.seed, plan.digests[g], i));
                 mo.threads = o.threads;
                 mo.bar = o.bar.clone();
+                mo.cancel = runner.cancel;
                 // The profile a renderer applies everywhere: averaged over where the beam
                 // meets the junction's papillae (profile/DECISIONS.md, row 1).
                 mo.random_entry = true;
-                run_white_sets(&stack, &sets, bins, &mo).map_err(|err| {
-                    anyhow::anyhow!(
-                        "entry {} at {} nm: {err}",
-                        entries[members[0]].name,
-                        lambda_nm[i]
-                    )
+                run_white_sets(&stack, &sets, bins, &mo).with_context(|| {
+                    format!("entry {} at {} nm", entries[members[0]].name, lambda_nm[i])
                 })
             })?;
             done += 1;
@@ -375,13 +374,15 @@ fn photon_counts(
                     McOptions::new(pilot, task_seed(o.seed ^ PILOT_TAG, plan.digests[g], i));
                 mo.threads = o.threads;
                 mo.random_entry = true;
-                run_white_sets(&stack, &sets, &RadialBins::uniform(1.0, 1), &mo).map_err(|err| {
-                    anyhow::anyhow!(
-                        "entry {} at {} nm: {err}",
-                        entries[plan.groups[g][0]].name,
-                        lambda_nm[i]
-                    )
-                })
+                mo.cancel = runner.cancel;
+                run_white_sets(&stack, &sets, &RadialBins::uniform(1.0, 1), &mo).with_context(
+                    || {
+                        format!(
+                            "entry {} at {} nm",
+                            entries[plan.groups[g][0]].name, lambda_nm[i]
+                        )
+                    },
+                )
             })?
             .expect("pilot units are never sharded");
         events.push((run.scattering_events as f64 / run.photons as f64).max(1.0));

@@ -8,6 +8,7 @@
 pub mod absorption;
 pub mod chromophores;
 pub mod collagen;
+pub mod document;
 pub mod layers;
 pub mod model;
 pub mod params;

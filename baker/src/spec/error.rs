@@ -6,8 +6,9 @@ use thiserror::Error;
 
 #[derive(Debug, Clone, Error, PartialEq)]
 pub enum SpecError {
-    #[error("{file}: cannot read: {message}")]
-    Io { file: String, message: String },
+    /// The spec file itself cannot be read (missing, a directory, too large, not text).
+    #[error("{0}")]
+    File(crate::files::FileError),
     /// A YAML syntax error, an unknown field or a wrong type, as the parser reports it.
     #[error("{file}:{line}:{column}: {message}")]
     Syntax {

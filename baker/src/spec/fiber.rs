@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use super::error::{SpecError, SpecErrors};
+use super::limits::{count_text, Limits};
+use super::names;
 use super::raw::Spanned;
 use super::resolve::{loc, parse_plain, parse_yaml, Ctx};
 use crate::fiber::bake::BakeSettings;
@@ -15,6 +17,7 @@ use crate::fiber::material::{FiberType, TABLE_9, WOOL_SCALE_LENGTH_UM, WOOL_SCAL
 use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
 use crate::fiber::sweep::ChannelKind;
+use crate::fiber::symmetry::{self, Symmetry};
 use crate::fiber::{Cuticle, Fiber, Section, Surface};
 use formats::Precision;
 
@@ -27,6 +30,8 @@ pub struct RawFiberSpec {
     #[serde(default)]
     pub fibers: Vec<Spanned<RawFiber>>,
     pub bake: Option<Spanned<RawBake>>,
+    /// Resource budgets ([`super::limits`]).
+    pub limits: Option<Spanned<super::limits::RawLimits>>,
 }
 
 /// `bake:` — how `baker bake` tabulates the BCSDFs (all optional).
@@ -136,6 +141,37 @@ pub struct FiberSpec {
     pub dyes: Vec<Dye>,
     pub fibers: Vec<FiberEntry>,
     pub bake: BakeSettings,
+    pub limits: Limits,
+    /// Where `bake.photons_per_direction` is set (line 1 when it is not).
+    pub photons_at: (u64, u64),
+    /// SHA-256 of the spec text as read (provenance in every table).
+    pub sha256: String,
+}
+
+/// Largest Beckmann slope angle β, degrees, whether given as `beta_deg` or from `roughness`.
+pub const MAX_BETA_DEG: f64 = 45.0;
+
+/// A measured (polygon or mask) section must be within this factor of its type's Table 9
+/// diameter range: real fibers vary (Table 9 gives one value for polyester), unit mistakes are
+/// factors of 1000 (mm for µm) or ~25 (a wrong `um_per_px`).
+pub const MEASURED_SIZE_FACTOR: f64 = 2.0;
+
+/// A range bound as people write it: `1`, `64`, `1e12`, `9.007199254740992e15`.
+fn bound(x: f64) -> String {
+    if x.abs() >= 1e6 {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// A width for messages: `0.011`, `1003.7`, `1.2e-5`.
+fn fmt_um(w: f64) -> String {
+    if w.is_finite() && (0.01..1e5).contains(&w) {
+        format!("{}", (w * 1000.0).round() / 1000.0)
+    } else {
+        format!("{w:.3e}")
+    }
 }
 
 /// Where a section came from.
@@ -179,6 +215,14 @@ pub struct FiberEntry {
     pub variants: Vec<Option<(Dye, f64)>>,
     /// `auto`: detect the symmetries; `none`: trace every incoming direction.
     pub symmetry: SymmetryMode,
+    /// Every cross-section baked (`sections` of them, the first is [`FiberEntry::section`]),
+    /// built by the resolver so a bake cannot fail on one.
+    pub population: Vec<Section>,
+    /// The symmetries the bake uses (those every section shares, on the bake's grid; none
+    /// with `symmetry: none`).
+    pub symmetries: Symmetry,
+    /// Incoming directions the tables store after symmetry reduction.
+    pub stored_directions: usize,
 }
 
 impl FiberEntry {
@@ -244,27 +288,32 @@ pub enum SymmetryMode {
     None,
 }
 
-/// True when the YAML text is a fiber spec (it has a top-level `fibers:` key).
-pub fn is_fiber_spec(text: &str) -> bool {
-    text.lines().any(|l| l.starts_with("fibers:"))
-}
-
+/// Reads and validates the fiber spec at `path` (a skin spec is an error that says so).
 pub fn load(path: &Path) -> Result<FiberSpec, SpecErrors> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        SpecErrors(vec![SpecError::Io {
-            file: file.clone(),
-            message: e.to_string(),
-        }])
-    })?;
-    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    load_str(&file, &text, &dir)
+    match super::load_any_str(
+        &file,
+        &super::read(path)?,
+        path.parent().unwrap_or(Path::new(".")),
+    )? {
+        super::Spec::Fiber(s) => Ok(s),
+        super::Spec::Skin(_) => Err(SpecErrors(vec![SpecError::Invalid {
+            file,
+            line: 1,
+            column: 1,
+            field: "spec".into(),
+            message: "is a skin spec (it has no `fibers:`); this command takes a fiber spec".into(),
+        }])),
+    }
 }
 
 /// Validates fiber-spec text; files it names are looked up relative to `dir`.
 pub fn load_str(file: &str, text: &str, dir: &Path) -> Result<FiberSpec, SpecErrors> {
     let raw: RawFiberSpec = parse_yaml(file, text, &|t| check_str(file, t, dir))?;
-    resolve_raw(file, raw, dir)
+    resolve_raw(file, raw, dir).map(|s| FiberSpec {
+        sha256: super::sha256_hex(text.as_bytes()),
+        ..s
+    })
 }
 
 fn resolve_raw(file: &str, raw: RawFiberSpec, dir: &Path) -> Result<FiberSpec, SpecErrors> {
@@ -297,6 +346,7 @@ impl Ctx {
                 self.out_of_range(loc(v), "version", v.value.to_string(), "1".into());
             }
         }
+        let limits = self.limits(raw.limits.as_ref());
         let mut dyes = dye::presets();
         // Dyes of the spec that failed their checks: already reported, so a fiber naming one
         // is not told the name is unknown.
@@ -316,14 +366,30 @@ impl Ctx {
                 dyes.push(dy);
             }
         }
+        if raw.fibers.len() as u64 > limits.entries {
+            self.over_limit(
+                (1, 1),
+                "fibers",
+                format!(
+                    "the spec lists {} fibers",
+                    count_text(raw.fibers.len() as u64)
+                ),
+                "entries",
+                count_text(limits.entries),
+            );
+        }
+        let bake = raw
+            .bake
+            .as_ref()
+            .map_or_else(BakeSettings::default, |b| self.bake(&b.value, &limits));
         let mut fibers: Vec<FiberEntry> = Vec::new();
-        for f in &raw.fibers {
-            if let Some(e) = self.fiber(f, &dyes, &broken, dir) {
-                if let Some(first) = fibers.iter().find(|x| x.name == e.name) {
+        for f in raw.fibers.iter().take(limits.entries as usize) {
+            if let Some(e) = self.fiber(f, &dyes, &broken, dir, &bake, &limits) {
+                if let Some(first) = fibers.iter().find(|x| x.name.eq_ignore_ascii_case(&e.name)) {
                     self.invalid(
                         loc(&f.value.name),
                         "fibers.name",
-                        format!("{:?} already defined on line {}", e.name, first.line),
+                        super::resolve::duplicate_message(&e.name, &first.name, first.line),
                     );
                 } else {
                     fibers.push(e);
@@ -333,19 +399,79 @@ impl Ctx {
         if raw.fibers.is_empty() {
             self.invalid((1, 1), "fibers", "the spec lists no fibers");
         }
-        let bake = raw
+        let photons_at = raw
             .bake
             .as_ref()
-            .map_or_else(BakeSettings::default, |b| self.bake(&b.value));
+            .and_then(|b| b.value.photons_per_direction.as_ref().map(loc))
+            .unwrap_or((1, 1));
         FiberSpec {
             file: self.file.clone(),
             dyes,
             fibers,
             bake,
+            limits,
+            photons_at,
+            sha256: String::new(),
         }
     }
 
-    fn bake(&mut self, b: &RawBake) -> BakeSettings {
+    /// The symmetries and stored directions of an entry's population on the bake's grid, and
+    /// the size of its tables against `limits.table_gib`.
+    fn population_costs(
+        &mut self,
+        at: (u64, u64),
+        e: &mut FiberEntry,
+        st: &BakeSettings,
+        limits: &Limits,
+    ) -> Option<()> {
+        let fibers: Vec<Fiber> = e
+            .population
+            .iter()
+            .map(|s| e.fiber_with(s.clone()))
+            .collect();
+        e.symmetries = if e.symmetry == SymmetryMode::None {
+            Symmetry::NONE
+        } else {
+            let mut sym = symmetry::detect(&fibers[0], st.res_deg);
+            for f in &fibers[1..] {
+                sym = sym.common(&symmetry::detect(f, st.res_deg));
+            }
+            sym
+        };
+        let grid = crate::fiber::AngularGrid::new(st.res_deg).ok()?;
+        e.stored_directions = e
+            .symmetries
+            .stored_count(grid.n_theta, grid.n_phi, st.res_deg);
+        let tables = fibers.len() + usize::from(fibers.len() > 1);
+        let bytes = e.stored_directions as f64
+            * tables as f64
+            * e.variants.len() as f64
+            * st.channels_per_variant() as f64
+            * grid.bins() as f64
+            * 4.0;
+        let gib = bytes / (1u64 << 30) as f64;
+        if gib > limits.table_gib {
+            self.over_limit(
+                at,
+                "fibers",
+                format!(
+                    "{}: {} stored directions × {tables} table(s) × {} variant(s) × {} channel(s) × {} bins \
+                     is {gib:.1} GiB of f32 tables",
+                    e.name,
+                    count_text(e.stored_directions as u64),
+                    e.variants.len(),
+                    st.channels_per_variant(),
+                    count_text(grid.bins() as u64),
+                ),
+                "table_gib",
+                format!("{} GiB", limits.table_gib),
+            );
+            return None;
+        }
+        Some(())
+    }
+
+    fn bake(&mut self, b: &RawBake, limits: &Limits) -> BakeSettings {
         let d = BakeSettings::default();
         let res_deg = match &b.resolution_deg {
             Some(r) => match self.in_range("bake.resolution_deg", r, 0.25, 30.0, false) {
@@ -366,23 +492,12 @@ impl Ctx {
         let photons = self.count(
             "bake.photons_per_direction",
             &b.photons_per_direction,
+            1.0,
             1e12,
             d.photons,
         );
-        if photons == 0 {
-            if let Some(p) = &b.photons_per_direction {
-                self.out_of_range(
-                    loc(p),
-                    "bake.photons_per_direction",
-                    "0".into(),
-                    "[1, 1e12]".into(),
-                );
-            }
-        }
-        let seed = self.count("bake.seed", &b.seed, 2f64.powi(53), d.seed);
-        let split = self
-            .count("bake.split", &b.split, 64.0, d.split as u64)
-            .max(1) as u32;
+        let seed = self.count("bake.seed", &b.seed, 0.0, 2f64.powi(53), d.seed);
+        let split = self.count("bake.split", &b.split, 1.0, 64.0, d.split as u64) as u32;
         let precision = match &b.precision {
             Some(p) => self
                 .choice(
@@ -432,8 +547,27 @@ impl Ctx {
                 let st = self.in_range("bake.lambda_nm.step", &r.step, 0.0, 100.0, true);
                 match (a, e, st) {
                     (Some(a), Some(e), Some(st)) if e >= a => {
-                        let n = ((e - a) / st + 1e-9).floor() as usize + 1;
-                        (0..n).map(|i| a + st * i as f64).collect()
+                        // Counted in f64 before any wavelength is built.
+                        let n = ((e - a) / st + 1e-9).floor() + 1.0;
+                        if n > limits.wavelengths as f64 {
+                            self.over_limit(
+                                loc(&r.step),
+                                "bake.lambda_nm.step",
+                                format!(
+                                    "{a}–{e} nm in steps of {st} nm gives {} wavelengths",
+                                    if n < 1e15 {
+                                        count_text(n as u64)
+                                    } else {
+                                        format!("{n:.3e}")
+                                    }
+                                ),
+                                "wavelengths",
+                                count_text(limits.wavelengths),
+                            );
+                            d.lambda_nm.clone()
+                        } else {
+                            (0..n as usize).map(|i| a + st * i as f64).collect()
+                        }
                     }
                     (Some(a), Some(e), Some(_)) => {
                         self.out_of_range(
@@ -534,18 +668,26 @@ impl Ctx {
         Some(dye)
     }
 
-    fn count(&mut self, field: &str, v: &Option<Spanned<f64>>, hi: f64, default: u64) -> u64 {
+    /// A whole number in [lo, hi] (the range printed is the one checked).
+    fn count(
+        &mut self,
+        field: &str,
+        v: &Option<Spanned<f64>>,
+        lo: f64,
+        hi: f64,
+        default: u64,
+    ) -> u64 {
         match v {
-            Some(s) if s.value.fract() != 0.0 => {
+            Some(s) if !(s.value.fract() == 0.0 && s.value >= lo && s.value <= hi) => {
                 self.out_of_range(
                     loc(s),
                     field,
                     s.value.to_string(),
-                    format!("a whole number in [0, {hi}]"),
+                    format!("[{}, {}], a whole number", bound(lo), bound(hi)),
                 );
                 default
             }
-            _ => self.opt_range(field, v, 0.0, hi, false, default as f64) as u64,
+            _ => self.opt_range(field, v, lo, hi, false, default as f64) as u64,
         }
     }
 
@@ -555,12 +697,22 @@ impl Ctx {
         dyes: &[Dye],
         broken: &[String],
         dir: &Path,
+        st: &BakeSettings,
+        limits: &Limits,
     ) -> Option<FiberEntry> {
         let r = &f.value;
+        if let Err(m) = names::check(&r.name.value) {
+            self.invalid(
+                loc(&r.name),
+                "fibers.name",
+                names::message(&r.name.value, &m),
+            );
+            return None;
+        }
         let types: Vec<(&str, &'static FiberType)> = TABLE_9.iter().map(|t| (t.name, t)).collect();
         let ft: &'static FiberType = self.choice("fibers.type", &r.kind, &types)?;
-        let seed = self.count("fibers.seed", &r.seed, 2f64.powi(53), 1);
-        let variant = self.count("fibers.variant", &r.variant, 1e6, 0);
+        let seed = self.count("fibers.seed", &r.seed, 0.0, 2f64.powi(53), 1);
+        let variant = self.count("fibers.variant", &r.variant, 0.0, 1e6, 0);
         // Diameter: given, or drawn in Table 9's range from the seed and variant.
         let (dlo, dhi) = ft.diameter_um;
         let diameter_um = match &r.diameter_um {
@@ -581,7 +733,7 @@ impl Ctx {
                 );
                 return None;
             }
-            (Some(b), None) => self.in_range("fibers.beta_deg", b, 0.0, 45.0, false)?,
+            (Some(b), None) => self.in_range("fibers.beta_deg", b, 0.0, MAX_BETA_DEG, false)?,
             (None, Some(rr)) => {
                 let ra = self.in_range(
                     "fibers.roughness.ra_nm",
@@ -591,11 +743,22 @@ impl Ctx {
                     false,
                 )?;
                 let l = self.in_range("fibers.roughness.l_nm", &rr.value.l_nm, 0.0, 1e4, true)?;
-                (ra / l).atan().to_degrees() // §5.3.1: β = arctan(Ra/l)
+                let beta = (ra / l).atan().to_degrees(); // §5.3.1: β = arctan(Ra/l)
+                                                         // The same range as `beta_deg`: the facet model is not meant for steeper slopes.
+                if beta > MAX_BETA_DEG {
+                    self.out_of_range(
+                        loc(rr),
+                        "fibers.roughness",
+                        format!("ra_nm = {ra}, l_nm = {l} (β = arctan(Ra/l) = {beta:.2}°)"),
+                        format!("Ra/l ≤ tan {MAX_BETA_DEG}° = 1, as `beta_deg` is in [0, {MAX_BETA_DEG}]"),
+                    );
+                    return None;
+                }
+                beta
             }
             (None, None) => ft.beta_deg(),
         };
-        let (source, raw_section) = self.section(r, ft, seed, variant, dir)?;
+        let (source, raw_section) = self.section(r, ft, seed, variant, dir, limits)?;
         let section = match raw_section.scaled_to_diameter(diameter_um) {
             Ok(s) => s,
             Err(e) => {
@@ -603,9 +766,36 @@ impl Ctx {
                 return None;
             }
         };
-        // Mask and polygon sections keep their measured size unless a diameter is given.
+        // Mask and polygon sections keep their measured size unless a diameter is given; that
+        // size must be a plausible fiber of the type (a polygon in mm or a mask at a wrong
+        // scale is off by a factor of ~1000 or ~25).
         let section = match (&source, &r.diameter_um) {
-            (SectionSource::Polygon { .. } | SectionSource::Mask { .. }, None) => raw_section,
+            (SectionSource::Polygon { .. } | SectionSource::Mask { .. }, None) => {
+                let w = raw_section.mean_width_um();
+                let (lo, hi) = (dlo / MEASURED_SIZE_FACTOR, dhi * MEASURED_SIZE_FACTOR);
+                if !(lo..=hi).contains(&w) {
+                    let what = match &source {
+                        SectionSource::Mask { .. } => "the mask at its `um_per_px`",
+                        _ => "the polygon (coordinates in µm)",
+                    };
+                    self.out_of_range(
+                        loc(r.section.as_ref().map_or(&r.name, |s| {
+                            let v = &s.value;
+                            v.polygon.as_ref().or(v.mask.as_ref()).unwrap_or(&r.name)
+                        })),
+                        "fibers.section",
+                        format!("{what} measures {} µm across", fmt_um(w)),
+                        format!(
+                            "{lo}–{hi} µm for {} (Table 9: {dlo}–{dhi} µm, within a factor of \
+                             {MEASURED_SIZE_FACTOR}); check the units, or set `diameter_um` to \
+                             scale the section",
+                            ft.name
+                        ),
+                    );
+                    return None;
+                }
+                raw_section
+            }
             _ => section,
         };
         let diameter_um = section.mean_width_um();
@@ -676,7 +866,7 @@ impl Ctx {
             }
             (None, None) => None,
         };
-        let sections = self.count("fibers.sections", &r.sections, 64.0, 1).max(1);
+        let sections = self.count("fibers.sections", &r.sections, 1.0, 64.0, 1);
         if sections > 1 && !matches!(source, SectionSource::Generator { .. }) {
             self.invalid(
                 loc(r.sections.as_ref().unwrap()),
@@ -688,18 +878,53 @@ impl Ctx {
         let mut variants = Vec::new();
         if let Some(sweep) = &r.sweep {
             let sw = &sweep.value;
-            if sw.undyed.as_ref().is_some_and(|u| u.value) {
+            let undyed = sw.undyed.as_ref().is_some_and(|u| u.value);
+            // Counted before any is built: every dye × every depth of shade (+ undyed).
+            let n = (sw.dyes.value.len() as u64)
+                .saturating_mul(sw.depth_of_shade_percent.value.len() as u64)
+                .saturating_add(u64::from(undyed));
+            if n > limits.variants {
+                self.over_limit(
+                    loc(sweep),
+                    "fibers.sweep",
+                    format!(
+                        "{} dyes × {} depths of shade{} are {} variants",
+                        count_text(sw.dyes.value.len() as u64),
+                        count_text(sw.depth_of_shade_percent.value.len() as u64),
+                        if undyed { " + undyed" } else { "" },
+                        count_text(n)
+                    ),
+                    "variants",
+                    count_text(limits.variants),
+                );
+                return None;
+            }
+            if undyed {
                 variants.push(None);
             }
-            for (i, name) in sw.dyes.value.iter().enumerate() {
-                if let Some(first) = sw.dyes.value[..i].iter().find(|n| n.value == name.value) {
+            let mut first_dos: std::collections::HashMap<u64, u64> = Default::default();
+            for dos in &sw.depth_of_shade_percent.value {
+                if let Some(l) = first_dos.insert(dos.value.to_bits(), loc(dos).0) {
+                    self.invalid(
+                        loc(dos),
+                        "fibers.sweep.depth_of_shade_percent",
+                        format!(
+                            "{} is listed twice (first on line {l}); allowed: each depth of shade once",
+                            dos.value
+                        ),
+                    );
+                    return None;
+                }
+            }
+            let mut first_dye: std::collections::HashMap<&str, u64> = Default::default();
+            for name in &sw.dyes.value {
+                if let Some(first_line) = first_dye.insert(name.value.as_str(), loc(name).0) {
                     self.invalid(
                         loc(name),
                         "fibers.sweep.dyes",
                         format!(
-                            "{:?} is listed twice (first on line {}); allowed: each dye once",
+                            "{:?} is listed twice (first on line {first_line}); allowed: each dye once",
                             name.value,
-                            loc(first).0
                         ),
                     );
                     return None;
@@ -758,7 +983,7 @@ impl Ctx {
             )?,
             None => SymmetryMode::Auto,
         };
-        Some(FiberEntry {
+        let mut e = FiberEntry {
             sections,
             variants,
             symmetry,
@@ -769,10 +994,26 @@ impl Ctx {
             diameter_um,
             eta,
             beta_deg,
-            section,
+            section: section.clone(),
             cuticle,
             dye,
-        })
+            population: vec![section],
+            symmetries: Symmetry::NONE,
+            stored_directions: 0,
+        };
+        // The population the bake traces, built here so that a bake cannot fail on it.
+        for k in 1..sections {
+            match e.section_variant(k) {
+                Ok(sec) => e.population.push(sec),
+                Err(m) => {
+                    let at = r.sections.as_ref().map_or(loc(&r.name), loc);
+                    self.invalid(at, "fibers.sections", format!("section {k}: {m}"));
+                    return None;
+                }
+            }
+        }
+        self.population_costs(loc(f), &mut e, st, limits)?;
+        Some(e)
     }
 
     fn section(
@@ -782,6 +1023,7 @@ impl Ctx {
         seed: u64,
         variant: u64,
         dir: &Path,
+        limits: &Limits,
     ) -> Option<(SectionSource, Section)> {
         let Some(s) = &r.section else {
             let shape = ft.default_shape;
@@ -863,7 +1105,7 @@ impl Ctx {
                 dir,
                 "a CSV of x_um,y_um rows (a blank line or `hole` starts a hole)",
             )?;
-            return match Section::from_csv(&file) {
+            return match Section::from_csv(&file, limits.polygon_vertices) {
                 Ok(sec) => Some((SectionSource::Polygon { file }, sec)),
                 Err(e) => {
                     self.invalid(loc(p), "fibers.section.polygon", e.to_string());
@@ -882,6 +1124,8 @@ impl Ctx {
         };
         let um_per_px = self.in_range("fibers.section.um_per_px", um, 0.0, 100.0, true)?;
         let mut o = MaskOptions::new(um_per_px);
+        o.max_pixels = limits.mask_pixels;
+        o.max_vertices = limits.polygon_vertices;
         if let Some(sp) = &v.smoothing_passes {
             o.smoothing_passes =
                 self.in_range("fibers.section.smoothing_passes", sp, 0.0, 100.0, false)? as usize;
@@ -911,8 +1155,17 @@ impl Ctx {
         what: &str,
     ) -> Option<PathBuf> {
         let file = dir.join(&name.value);
-        if file.is_file() {
-            return Some(file);
+        match std::fs::metadata(&file) {
+            Ok(m) if !m.is_dir() => return Some(file),
+            Ok(_) => {
+                self.invalid(
+                    loc(name),
+                    field,
+                    format!("{}: is a directory; expected {what}", file.display()),
+                );
+                return None;
+            }
+            Err(_) => {}
         }
         self.invalid(
             loc(name),

@@ -23,6 +23,8 @@ pub struct RawSpec {
     pub sweeps: Vec<Spanned<RawParams>>,
     /// How diffusion profiles are baked (photons, seed, radial grid, Gaussian count).
     pub profiles: Option<Spanned<RawProfiles>>,
+    /// Resource budgets ([`super::limits`]).
+    pub limits: Option<Spanned<super::limits::RawLimits>>,
 }
 
 /// `profiles: {photons, seed, gaussians, radial: {dr_min_mm, growth, r_max_mm}}`.

@@ -5,8 +5,9 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use super::error::{SpecError, SpecErrors};
+use super::limits::{count_text, Limits};
 use super::raw::{OneOrMany, RawCollagen, RawLayerValues, RawParams, RawSpec, Spanned, Token};
-use super::syntax;
+use super::{names, syntax};
 use crate::skin::params::{CollagenAging, SkewNormal};
 use crate::skin::{
     BodyLocation, Freeze, Gender, HypodermisAbsorption, Layer, MelaninInput, ModelKind,
@@ -27,6 +28,15 @@ pub struct SkinSpec {
     pub wavelengths: WavelengthGrid,
     pub entries: Vec<ResolvedEntry>,
     pub profiles: ProfileSettings,
+    pub limits: Limits,
+    /// Where `profiles.photons` is set (line 1 when it is not): budget errors point there.
+    pub photons_at: (u64, u64),
+    /// Simulation groups of entries that share scattering ([`crate::profile::plan`] with
+    /// absorption reuse), and the largest group's size.
+    pub groups: usize,
+    pub largest_group: usize,
+    /// SHA-256 of the spec text as read (provenance in every table).
+    pub sha256: String,
 }
 
 /// How the diffusion profiles of a spec are baked (`profiles:` block).
@@ -75,22 +85,32 @@ pub struct ResolvedEntry {
     pub params: SkinParams,
 }
 
-/// Reads and validates the spec at `path`.
+/// Reads and validates the skin spec at `path` (a fiber spec is an error that says so).
 pub fn load(path: &Path) -> Result<SkinSpec, SpecErrors> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        SpecErrors(vec![SpecError::Io {
-            file: file.clone(),
-            message: e.to_string(),
-        }])
-    })?;
-    load_str(&file, &text)
+    match super::load_any_str(
+        &file,
+        &super::read(path)?,
+        path.parent().unwrap_or(Path::new(".")),
+    )? {
+        super::Spec::Skin(s) => Ok(s),
+        super::Spec::Fiber(_) => Err(SpecErrors(vec![SpecError::Invalid {
+            file,
+            line: 1,
+            column: 1,
+            field: "spec".into(),
+            message: "is a fiber spec (it has `fibers:`); this command takes a skin spec".into(),
+        }])),
+    }
 }
 
 /// Validates spec text; `file` names it in messages.
 pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
     let raw: RawSpec = parse_yaml(file, text, &|t| check_str(file, t))?;
-    resolve_raw(file, raw)
+    resolve_raw(file, raw).map(|s| SkinSpec {
+        sha256: super::sha256_hex(text.as_bytes()),
+        ..s
+    })
 }
 
 fn resolve_raw(file: &str, raw: RawSpec) -> Result<SkinSpec, SpecErrors> {
@@ -283,7 +303,8 @@ impl Ctx {
                 self.out_of_range(loc(v), "version", v.value.to_string(), "1".into());
             }
         }
-        let wavelengths = self.wavelengths(&raw);
+        let limits = self.limits(raw.limits.as_ref());
+        let wavelengths = self.wavelengths(&raw, &limits);
         let defaults = raw
             .defaults
             .as_ref()
@@ -299,6 +320,37 @@ impl Ctx {
             }
             self.reject_lists(&d.value, "defaults");
         }
+        // How many entries the sweeps expand to, counted before any is built.
+        let sweep_sizes: Vec<u64> = raw
+            .sweeps
+            .iter()
+            .map(|s| point_count(&merge(&defaults, &s.value)))
+            .collect();
+        let total = sweep_sizes
+            .iter()
+            .fold(raw.entries.len() as u64, |a, &n| a.saturating_add(n));
+        let expand_sweeps = total <= limits.entries;
+        if !expand_sweeps {
+            let (k, n) = sweep_sizes
+                .iter()
+                .enumerate()
+                .max_by_key(|x| *x.1)
+                .map(|(k, n)| (k, *n))
+                .unwrap_or((0, 0));
+            let at = raw.sweeps.get(k).map_or((1, 1), loc);
+            self.over_limit(
+                at,
+                "sweeps",
+                format!(
+                    "the spec expands to {} entries ({} from the sweep on line {})",
+                    count_text(total),
+                    count_text(n),
+                    at.0
+                ),
+                "entries",
+                count_text(limits.entries),
+            );
+        }
         let mut entries = Vec::new();
         for e in &raw.entries {
             self.reject_lists(&e.value, "entries");
@@ -307,6 +359,10 @@ impl Ctx {
                 self.invalid(loc(e), "name", "every entry needs a name");
                 continue;
             };
+            if let Err(m) = names::check(&name.value) {
+                self.invalid(loc(&name), "name", names::message(&name.value, &m));
+                continue;
+            }
             let point = single_point(&merged);
             if let Some(params) = self.params(&merged, &point, loc(e)) {
                 entries.push(ResolvedEntry {
@@ -326,13 +382,28 @@ impl Ctx {
                 );
                 continue;
             };
-            let points = expand(&merged);
             self.check_template(&template, &merged);
             self.reject_repeats(&s.value);
-            for point in points {
+            if !expand_sweeps {
+                continue;
+            }
+            for point in expand(&merged) {
+                let name = fill_template(&template.value, &point);
+                if let Err(m) = names::check(&name) {
+                    self.invalid(
+                        loc(&template),
+                        "name",
+                        format!(
+                            "the template {:?} gives the name {}",
+                            template.value,
+                            names::message(&name, &m)
+                        ),
+                    );
+                    continue;
+                }
                 if let Some(params) = self.params(&merged, &point, loc(s)) {
                     entries.push(ResolvedEntry {
-                        name: fill_template(&template.value, &point),
+                        name,
                         line: loc(s).0,
                         params,
                     });
@@ -342,33 +413,69 @@ impl Ctx {
         if raw.entries.is_empty() && raw.sweeps.is_empty() {
             self.invalid((1, 1), "entries", "the spec has no entries and no sweeps");
         }
-        let mut seen: HashMap<&str, u64> = HashMap::new();
-        let mut dups = Vec::new();
-        for e in &entries {
-            if let Some(first) = seen.insert(&e.name, e.line) {
-                dups.push((
-                    (e.line, 1),
-                    format!("{:?} already defined on line {first}", e.name),
-                ));
+        self.reject_duplicate_names("name", entries.iter().map(|e| (e.name.as_str(), e.line)));
+        let profiles = self.profiles(&raw, &limits);
+        // What the bake would reject after the spec: a layer that vanishes with age, a junction
+        // deeper than its layers, a stack the transport refuses.
+        let mut docs = Vec::new();
+        if self.errors.is_empty() {
+            for e in &entries {
+                match check_model(e, &wavelengths) {
+                    Ok(d) => docs.push(d),
+                    Err(m) => self.invalid((e.line, 1), "entry", format!("{}: {m}", e.name)),
+                }
             }
         }
-        for (at, m) in dups {
-            self.invalid(at, "name", m);
-        }
-        let profiles = self.profiles(&raw);
+        // Simulation groups (entries sharing scattering), for the bake's cost and memory.
+        let plan = crate::profile::plan(&docs, wavelengths.len(), true);
+        let groups = plan.groups.len();
+        let largest_group = plan.groups.iter().map(Vec::len).max().unwrap_or(0);
+        let photons_at = raw
+            .profiles
+            .as_ref()
+            .and_then(|p| p.value.photons.as_ref().map(loc))
+            .unwrap_or((1, 1));
         SkinSpec {
             file: self.file.clone(),
             wavelengths,
             entries,
             profiles,
+            limits,
+            photons_at,
+            groups,
+            largest_group,
+            sha256: String::new(),
         }
     }
 
-    fn profiles(&mut self, raw: &RawSpec) -> ProfileSettings {
+    /// Two entries with one name, or names equal but for case (one file on macOS and
+    /// Windows file systems).
+    pub(super) fn reject_duplicate_names<'a>(
+        &mut self,
+        field: &str,
+        names: impl Iterator<Item = (&'a str, u64)>,
+    ) {
+        let mut seen: HashMap<String, (&'a str, u64)> = HashMap::new();
+        let mut dups = Vec::new();
+        for (name, line) in names {
+            let key = name.to_ascii_lowercase();
+            if let Some(&(first, first_line)) = seen.get(&key) {
+                dups.push(((line, 1), duplicate_message(name, first, first_line)));
+            } else {
+                seen.insert(key, (name, line));
+            }
+        }
+        for (at, m) in dups {
+            self.invalid(at, field, m);
+        }
+    }
+
+    fn profiles(&mut self, raw: &RawSpec, limits: &Limits) -> ProfileSettings {
         let mut s = ProfileSettings::default();
         let Some(p) = &raw.profiles else {
             return s;
         };
+        let p_at = &p.value;
         let p = &p.value;
         let count = |this: &mut Self, field: &str, v: &Option<Spanned<f64>>, lo: f64, hi: f64| {
             let v = v.as_ref()?;
@@ -430,7 +537,11 @@ impl Ctx {
                 s.r_max_mm,
             );
             if s.r_max_mm <= s.dr_min_mm {
-                let at = r.r_max_mm.as_ref().map(loc).unwrap_or((0, 0));
+                let at = r
+                    .r_max_mm
+                    .as_ref()
+                    .map(loc)
+                    .unwrap_or(loc(&p_at.radial.as_ref().unwrap()));
                 self.invalid(
                     at,
                     "profiles.radial.r_max_mm",
@@ -438,11 +549,42 @@ impl Ctx {
                 );
                 s.r_max_mm = 40.0;
             }
+            // The bins the grid will have, counted (and capped) before any is allocated.
+            let cap = limits.radial_bins;
+            let n = crate::transport::RadialBins::fine_then_log_count(
+                s.dr_min_mm,
+                s.growth,
+                s.r_max_mm,
+                cap,
+            );
+            if n > cap {
+                let at = r
+                    .dr_min_mm
+                    .as_ref()
+                    .or(r.growth.as_ref())
+                    .or(r.r_max_mm.as_ref())
+                    .map_or_else(|| loc(p_at.radial.as_ref().unwrap()), loc);
+                self.over_limit(
+                    at,
+                    "profiles.radial",
+                    format!(
+                        "dr_min_mm = {}, growth = {}, r_max_mm = {} give more than {} radial bins",
+                        s.dr_min_mm,
+                        s.growth,
+                        s.r_max_mm,
+                        count_text(cap)
+                    ),
+                    "radial_bins",
+                    count_text(cap),
+                );
+                let d = ProfileSettings::default();
+                (s.dr_min_mm, s.growth, s.r_max_mm) = (d.dr_min_mm, d.growth, d.r_max_mm);
+            }
         }
         s
     }
 
-    fn wavelengths(&mut self, raw: &RawSpec) -> WavelengthGrid {
+    fn wavelengths(&mut self, raw: &RawSpec, limits: &Limits) -> WavelengthGrid {
         let Some(w) = &raw.wavelengths else {
             return WavelengthGrid::thesis_default();
         };
@@ -479,6 +621,16 @@ impl Ctx {
                 self.invalid(loc(list), "wavelengths.list_nm", "empty list");
                 return WavelengthGrid::thesis_default();
             }
+            if out.len() as u64 > limits.wavelengths {
+                self.over_limit(
+                    loc(list),
+                    "wavelengths.list_nm",
+                    format!("{} wavelengths", count_text(out.len() as u64)),
+                    "wavelengths",
+                    count_text(limits.wavelengths),
+                );
+                return WavelengthGrid::thesis_default();
+            }
             return WavelengthGrid::from_list(out);
         }
         let start = self.opt_range("wavelengths.start_nm", &v.start_nm, lo, hi, false, 400.0);
@@ -500,6 +652,26 @@ impl Ctx {
                 ),
                 (None, None) => {}
             }
+            return WavelengthGrid::thesis_default();
+        }
+        // As WavelengthGrid::uniform counts them, in f64 so no step can overflow the count.
+        let n = ((stop - start) / step + 1e-9).floor() + 1.0;
+        if n > limits.wavelengths as f64 {
+            let at = v.step_nm.as_ref().map_or_else(|| loc(w), loc);
+            self.over_limit(
+                at,
+                "wavelengths.step_nm",
+                format!(
+                    "{start}–{stop} nm in steps of {step} nm gives {} wavelengths",
+                    if n < 1e15 {
+                        count_text(n as u64)
+                    } else {
+                        format!("{n:.3e}")
+                    }
+                ),
+                "wavelengths",
+                count_text(limits.wavelengths),
+            );
             return WavelengthGrid::thesis_default();
         }
         WavelengthGrid::uniform(start, stop, step)
@@ -985,6 +1157,50 @@ fn values<T: Clone>(v: &Option<Spanned<OneOrMany<T>>>) -> Vec<Option<Spanned<T>>
 
 fn single_point(p: &RawParams) -> Point {
     expand(p).into_iter().next().unwrap_or_default()
+}
+
+/// The message for a name equal to an earlier one (`first`, on `first_line`), or equal but for
+/// case (one file on macOS and Windows file systems).
+pub(super) fn duplicate_message(name: &str, first: &str, first_line: u64) -> String {
+    if first == name {
+        format!("{name:?} already defined on line {first_line}")
+    } else {
+        format!(
+            "{name:?} differs from {first:?} (line {first_line}) only in case; allowed: names \
+             that differ in more than case (they name files, and macOS and Windows file \
+             systems ignore case)"
+        )
+    }
+}
+
+/// How many points [`expand`] gives, without building them (saturating).
+fn point_count(p: &RawParams) -> u64 {
+    [
+        count(&p.age),
+        count(&p.gender),
+        count(&p.skin_type),
+        count(&p.melanosome_fraction),
+        count(&p.location),
+        count(&p.xi),
+        count(&p.model),
+    ]
+    .iter()
+    .fold(1u64, |a, &n| a.saturating_mul(n.max(1) as u64))
+}
+
+/// The checks a bake applies after the spec, run on the entry: the model evaluates (§3.4:
+/// layers keep a thickness, the junction fits its layers) and every wavelength's stack is one
+/// the transport accepts.
+fn check_model(e: &ResolvedEntry, grid: &WavelengthGrid) -> Result<formats::OpticsEntry, String> {
+    let o = crate::skin::evaluate(&e.params, grid).map_err(|err| err.to_string())?;
+    let doc = crate::skin::document::entry(&e.name, &e.params, &o);
+    for (i, lambda_nm) in grid.lambda_nm().iter().enumerate() {
+        let stack = crate::transport::stack::from_skin(&doc, i);
+        let set: Vec<f64> = doc.layers.iter().map(|l| l.mua_per_mm[i]).collect();
+        crate::transport::white::check_sets(&stack, &[set])
+            .map_err(|m| format!("at {lambda_nm} nm: {m}"))?;
+    }
+    Ok(doc)
 }
 
 /// Cartesian product of the sweepable fields, in the order they are declared.

@@ -740,7 +740,7 @@ mod tests {
                             SpecError::Syntax { line, message, .. }
                             | SpecError::Invalid { line, message, .. } => (*line, message.clone()),
                             SpecError::OutOfRange { line, allowed, .. } => (*line, allowed.clone()),
-                            SpecError::Io { .. } => (1, String::from("io")),
+                            SpecError::File(_) => (1, String::from("io")),
                         };
                         assert!(
                             (1..=n + 1).contains(&line) && !msg.is_empty(),

@@ -39,6 +39,9 @@ pub struct McOptions {
     /// over where the beam meets the papillae, what a renderer applying one profile everywhere
     /// needs; off, the beam always enters above a node of Eq. 1 (MCML-like, x = y = 0).
     pub random_entry: bool,
+    /// Checked before every batch: once set, the run stops and returns
+    /// [`crate::cancel::Cancelled`] (no partial result).
+    pub cancel: crate::cancel::Cancel,
 }
 
 impl McOptions {
@@ -51,6 +54,7 @@ impl McOptions {
             progress: false,
             bar: None,
             random_entry: false,
+            cancel: crate::cancel::Cancel::NEVER,
         }
     }
 }
@@ -494,18 +498,25 @@ pub(crate) fn run_batches<T: Send>(
     let mut start = 0;
     while start < n_batches {
         let end = (start + chunk).min(n_batches);
-        let outs: Vec<T> = pool.install(|| {
+        // A batch that sees the flag is skipped; the whole run then reports cancellation.
+        let outs: Vec<Option<T>> = pool.install(|| {
             (start..end)
                 .into_par_iter()
                 .map(|b| {
+                    if o.cancel.is_set() {
+                        return None;
+                    }
                     let n = batch_size.min(photons - b * batch_size);
                     let out = work(b, n);
                     bar.inc(n);
-                    out
+                    Some(out)
                 })
                 .collect()
         });
-        outs.into_iter().for_each(&mut reduce);
+        if o.cancel.is_set() || outs.iter().any(Option::is_none) {
+            return Err(crate::cancel::Cancelled.into());
+        }
+        outs.into_iter().flatten().for_each(&mut reduce);
         start = end;
     }
     if o.bar.is_none() {

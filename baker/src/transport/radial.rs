@@ -36,6 +36,18 @@ impl RadialBins {
         Self { edges_mm }
     }
 
+    /// How many bins [`RadialBins::fine_then_log`] gives, counting no further than `cap + 1`
+    /// (so a hostile grid is measured without being built).
+    pub fn fine_then_log_count(dr_min_mm: f64, growth: f64, r_max_mm: f64, cap: u64) -> u64 {
+        let mut r = 0.0f64;
+        let mut n = 0u64;
+        while r < r_max_mm * (1.0 - 1e-12) && n <= cap {
+            r += dr_min_mm.max(r * (growth - 1.0));
+            n += 1;
+        }
+        n
+    }
+
     /// Explicit edges; they must start at 0 and increase strictly.
     pub fn from_edges(edges_mm: Vec<f64>) -> Result<Self, String> {
         if edges_mm.len() < 2 || edges_mm[0] != 0.0 {

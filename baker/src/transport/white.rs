@@ -262,6 +262,41 @@ impl Scorer for SetsScorer<'_> {
     }
 }
 
+/// Everything [`run_white_sets`] requires of its inputs: a valid stack, at least one set, one
+/// finite μa ≥ 0 per layer in each, and μa > 0 in a semi-infinite last layer (else a packet
+/// could walk forever). The spec resolver calls this too, so a spec that passes `validate`
+/// never fails here.
+pub fn check_sets(stack: &Stack, sets: &[AbsorptionSet]) -> Result<(), String> {
+    stack.validate().map_err(|e| e.to_string())?;
+    if sets.is_empty() {
+        return Err("no absorption sets to apply".into());
+    }
+    let nl = stack.layers.len();
+    for (s, set) in sets.iter().enumerate() {
+        if set.len() != nl {
+            return Err(format!(
+                "absorption set {s} has {} values for {nl} layers",
+                set.len()
+            ));
+        }
+        for (i, &m) in set.iter().enumerate() {
+            if !(m.is_finite() && m >= 0.0) {
+                return Err(format!(
+                    "absorption set {s}, layer {i}: μa must be finite and >= 0, got {m}"
+                ));
+            }
+        }
+    }
+    let last = nl - 1;
+    if stack.layers[last].d_mm.is_infinite() && sets.iter().any(|s| s[last] <= 0.0) {
+        return Err(format!(
+            "the {} is semi-infinite and needs μa > 0 (it has none: nothing would stop light in it)",
+            stack.layers[last].name
+        ));
+    }
+    Ok(())
+}
+
 /// Traces `stack`'s scattering once and scores every per-layer absorption set of `sets` on
 /// `bins`, streaming (no per-packet storage): the cost of a set is a few multiplications per
 /// escaping packet. Roulette plays against the per-layer minimum over `sets`, so no set loses
@@ -272,31 +307,16 @@ pub fn run_white_sets(
     bins: &RadialBins,
     o: &McOptions,
 ) -> anyhow::Result<WhiteSets> {
+    check_sets(stack, sets).map_err(anyhow::Error::msg)?;
     let mut p = Prepared::new(stack)?;
     p.set_random_entry(stack, o.random_entry);
-    if sets.is_empty() {
-        anyhow::bail!("no absorption sets to apply");
-    }
     let mut mua = vec![[0.0; MAX_LAYERS]; sets.len()];
     let mut mua_ref = [f64::INFINITY; MAX_LAYERS];
     for (s, set) in sets.iter().enumerate() {
-        if set.len() != p.nl {
-            anyhow::bail!(
-                "absorption set {s} has {} values for {} layers",
-                set.len(),
-                p.nl
-            );
-        }
         for (i, &m) in set.iter().enumerate() {
-            if !(m.is_finite() && m >= 0.0) {
-                anyhow::bail!("absorption set {s}, layer {i}: μa must be finite and >= 0, got {m}");
-            }
             mua[s][i] = m;
             mua_ref[i] = mua_ref[i].min(m);
         }
-    }
-    if stack.layers.last().unwrap().d_mm.is_infinite() && mua_ref[p.nl - 1] <= 0.0 {
-        anyhow::bail!("a semi-infinite last layer needs μa > 0 in every set of a white run");
     }
     let t0 = Instant::now();
     let mut all = WhiteSets {

@@ -20,14 +20,21 @@ pub struct MaskOptions {
     pub smoothing_passes: usize,
     /// Holes smaller than this many pixels are treated as segmentation noise and dropped.
     pub min_hole_px: f64,
+    /// Largest image, pixels (width × height, from the file's header, before decoding).
+    pub max_pixels: u64,
+    /// Largest outline, vertices (outer loop and holes).
+    pub max_vertices: u64,
 }
 
 impl MaskOptions {
     pub fn new(um_per_px: f64) -> Self {
+        let l = crate::spec::Limits::default();
         Self {
             um_per_px,
             smoothing_passes: 4,
             min_hole_px: 4.0,
+            max_pixels: l.mask_pixels,
+            max_vertices: l.polygon_vertices,
         }
     }
 }
@@ -58,7 +65,34 @@ pub fn from_mask(path: &Path, o: &MaskOptions) -> Result<(Section, MaskReport), 
             o.um_per_px
         )));
     }
-    let img = image::open(path)
+    let bytes = crate::files::read_bytes(path, crate::files::MAX_DATA_BYTES, "a mask image")
+        .map_err(|e| err(e.to_string()))?;
+    let reader = image::io::Reader::new(std::io::Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| err(format!("cannot read image: {e}")))?;
+    // The size its header declares, checked before a pixel is decoded (a 59 KB PNG can
+    // declare 22,000 × 22,000 pixels).
+    let (w, h) = reader
+        .into_dimensions()
+        .map_err(|e| err(format!("cannot read image: {e}")))?;
+    let pixels = w as u64 * h as u64;
+    if pixels > o.max_pixels {
+        return Err(err(format!(
+            "{w} × {h} = {pixels} pixels, over the limit of {} (`limits.mask_pixels`)",
+            o.max_pixels
+        )));
+    }
+    let mut reader = image::io::Reader::new(std::io::Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| err(format!("cannot read image: {e}")))?;
+    let mut limits = image::io::Limits::default();
+    limits.max_image_width = Some(w);
+    limits.max_image_height = Some(h);
+    // Decoder buffers: the image at up to 16 bytes per pixel (RGBA f32), plus slack.
+    limits.max_alloc = Some(16 * pixels + (16 << 20));
+    reader.limits(limits);
+    let img = reader
+        .decode()
         .map_err(|e| err(format!("cannot read image: {e}")))?
         .to_luma8();
     let (w, h) = (img.width() as usize, img.height() as usize);
@@ -134,6 +168,13 @@ pub fn from_pixels(
             .map(|p| [p[0] * o.um_per_px, -p[1] * o.um_per_px])
             .collect()
     };
+    let vertices = outer.len() + holes.iter().map(Vec::len).sum::<usize>();
+    if vertices as u64 > o.max_vertices {
+        return Err(err(format!(
+            "the outline has {vertices} vertices, over the limit of {} (`limits.polygon_vertices`)",
+            o.max_vertices
+        )));
+    }
     let poly = Polygon::new(to_um(outer), holes.into_iter().map(to_um).collect())?;
     let c = poly.centroid();
     Ok((Section::Polygon(poly.transformed(c, 1.0)?), report))

@@ -24,6 +24,10 @@ pub enum SectionError {
     Mask { file: String, message: String },
 }
 
+/// Largest |coordinate| of a polygon outline, µm (1 cm: far beyond any fiber, small enough that
+/// areas and moments stay finite in f64).
+pub const MAX_COORD_UM: f64 = 1e4;
+
 /// A cross-section in the fiber's xy plane (fiber axis +z), µm.
 #[derive(Debug, Clone)]
 pub enum Section {
@@ -202,14 +206,17 @@ impl Section {
 
     /// Reads a polygon CSV: rows `x_um,y_um`; a blank line or a row `hole` starts a hole; `#`
     /// comments and a header row `x_um,y_um` (or `x,y`) are skipped. The outline is moved so
-    /// that its area centroid is on the fiber axis.
-    pub fn from_csv(path: &Path) -> Result<Self, SectionError> {
+    /// that its area centroid is on the fiber axis. At most `max_vertices` vertices; every
+    /// coordinate within ±[`MAX_COORD_UM`].
+    pub fn from_csv(path: &Path, max_vertices: u64) -> Result<Self, SectionError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SectionError::Csv {
-            file: file.clone(),
-            line: 0,
-            message: e.to_string(),
-        })?;
+        let text = crate::files::read_text(path, crate::files::MAX_DATA_BYTES, "a polygon CSV")
+            .map_err(|e| SectionError::Csv {
+                file: file.clone(),
+                line: 0,
+                message: e.to_string(),
+            })?;
+        let mut vertices = 0u64;
         let mut loops: Vec<Vec<[f64; 2]>> = vec![Vec::new()];
         for (i, raw) in text.lines().enumerate() {
             let line = raw.trim();
@@ -225,8 +232,30 @@ impl Section {
             let cols: Vec<&str> = line.split(',').map(str::trim).collect();
             let parsed: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
             match parsed {
-                Some(v) if v.len() == 2 && v.iter().all(|x| x.is_finite()) => {
+                Some(v) if v.len() == 2 && v.iter().all(|x| x.abs() <= MAX_COORD_UM) => {
+                    vertices += 1;
+                    if vertices > max_vertices {
+                        return Err(SectionError::Csv {
+                            file,
+                            line: i + 1,
+                            message: format!(
+                                "more than {max_vertices} vertices, over the limit \
+                                 (`limits.polygon_vertices`)"
+                            ),
+                        });
+                    }
                     loops.last_mut().unwrap().push([v[0], v[1]])
+                }
+                Some(v) if v.len() == 2 => {
+                    return Err(SectionError::Csv {
+                        file,
+                        line: i + 1,
+                        message: format!(
+                            "coordinates ({}, {}) µm: each must be a finite number within \
+                             ±{MAX_COORD_UM} µm (a fiber is at most a few hundred µm across)",
+                            v[0], v[1]
+                        ),
+                    })
                 }
                 _ if i == 0 || loops.iter().all(|l| l.is_empty()) && cols.len() == 2 => continue,
                 _ => {

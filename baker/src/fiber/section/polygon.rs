@@ -119,18 +119,21 @@ impl Polygon {
                 segs.push((l[i], l[(i + 1) % l.len()]));
             }
         }
-        if segs.len() <= 20_000 {
-            for i in 0..segs.len() {
-                for j in i + 1..segs.len() {
-                    if segments_cross(segs[i].0, segs[i].1, segs[j].0, segs[j].1) {
-                        return Err(SectionError::Degenerate(format!(
-                            "outline crosses itself near ({:.3}, {:.3}) µm",
-                            segs[i].0[0], segs[i].0[1]
-                        )));
-                    }
-                }
-            }
+        if let Some(i) = first_crossing(&segs)? {
+            return Err(SectionError::Degenerate(format!(
+                "outline crosses itself near ({:.3}, {:.3}) µm",
+                segs[i].0[0], segs[i].0[1]
+            )));
         }
+        Ok(Self::from_checked(outer, holes, &segs))
+    }
+
+    /// A polygon from loops already checked by [`Polygon::new`] (oriented, simple).
+    fn from_checked(
+        outer: Vec<[f64; 2]>,
+        holes: Vec<Vec<[f64; 2]>>,
+        segs: &[([f64; 2], [f64; 2])],
+    ) -> Self {
         let edges: Vec<Edge> = segs
             .iter()
             .map(|&(a, b)| {
@@ -150,12 +153,12 @@ impl Polygon {
             })
             .collect();
         let grid = Grid::build(&edges);
-        Ok(Self {
+        Self {
             outer,
             holes,
             edges,
             grid,
-        })
+        }
     }
 
     pub fn outer(&self) -> &[[f64; 2]] {
@@ -290,14 +293,29 @@ impl Polygon {
             .fold(0.0, f64::max)
     }
 
-    /// The same outline scaled by `k` about the origin and shifted by `-shift` first.
+    /// The same outline scaled by `k > 0` about the origin and shifted by `-shift` first. A
+    /// similarity keeps a simple outline simple, so the loops are not checked again.
     pub fn transformed(&self, shift: [f64; 2], k: f64) -> Result<Self, SectionError> {
+        if !(k.is_finite() && k > 0.0) || !shift.iter().all(|x| x.is_finite()) {
+            return Err(SectionError::Degenerate(format!(
+                "cannot scale by {k} or shift by ({}, {})",
+                shift[0], shift[1]
+            )));
+        }
         let f = |l: &Vec<[f64; 2]>| -> Vec<[f64; 2]> {
             l.iter()
                 .map(|v| [(v[0] - shift[0]) * k, (v[1] - shift[1]) * k])
                 .collect()
         };
-        Self::new(f(&self.outer), self.holes.iter().map(f).collect())
+        let outer = f(&self.outer);
+        let holes: Vec<Vec<[f64; 2]>> = self.holes.iter().map(f).collect();
+        let mut segs = Vec::with_capacity(self.edges.len());
+        for l in std::iter::once(&outer).chain(holes.iter()) {
+            for i in 0..l.len() {
+                segs.push((l[i], l[(i + 1) % l.len()]));
+            }
+        }
+        Ok(Self::from_checked(outer, holes, &segs))
     }
 
     /// Area centroid of the material, µm.
@@ -316,6 +334,73 @@ impl Polygon {
         }
         [cx / (6.0 * a), cy / (6.0 * a)]
     }
+}
+
+/// Most segment pairs [`first_crossing`] tests: far above any real outline (a 100,000-vertex
+/// mask outline tests a few million), and a bound on the time a contrived one can take.
+const MAX_PAIR_TESTS: u64 = 400_000_000;
+
+/// The first segment (index) that properly crosses another, for any number of segments: pairs
+/// are tested only where their bounding boxes share a cell of a uniform grid of about 4
+/// segments per occupied cell, so a real outline costs O(n).
+fn first_crossing(segs: &[([f64; 2], [f64; 2])]) -> Result<Option<usize>, SectionError> {
+    let mut min = [f64::INFINITY; 2];
+    let mut max = [f64::NEG_INFINITY; 2];
+    for (a, b) in segs {
+        for p in [a, b] {
+            for k in 0..2 {
+                if !p[k].is_finite() {
+                    return Err(SectionError::Degenerate(
+                        "an outline coordinate is not a finite number".into(),
+                    ));
+                }
+                min[k] = min[k].min(p[k]);
+                max[k] = max[k].max(p[k]);
+            }
+        }
+    }
+    let size = [(max[0] - min[0]).max(1e-300), (max[1] - min[1]).max(1e-300)];
+    let side = (0.5 * (segs.len() as f64).sqrt()).clamp(1.0, 2048.0);
+    let longer = size[0].max(size[1]);
+    let n = [
+        ((side * size[0] / longer).ceil() as usize).max(1),
+        ((side * size[1] / longer).ceil() as usize).max(1),
+    ];
+    let cell_of = |x: f64, k: usize| -> usize {
+        ((((x - min[k]) / size[k]) * n[k] as f64).floor().max(0.0) as usize).min(n[k] - 1)
+    };
+    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n[0] * n[1]];
+    for (i, (a, b)) in segs.iter().enumerate() {
+        let (x0, x1) = (cell_of(a[0].min(b[0]), 0), cell_of(a[0].max(b[0]), 0));
+        let (y0, y1) = (cell_of(a[1].min(b[1]), 1), cell_of(a[1].max(b[1]), 1));
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                lists[y * n[0] + x].push(i as u32);
+            }
+        }
+    }
+    let mut tests = 0u64;
+    let mut first: Option<usize> = None;
+    for l in &lists {
+        tests += (l.len() as u64) * (l.len() as u64).saturating_sub(1) / 2;
+        if tests > MAX_PAIR_TESTS {
+            return Err(SectionError::Degenerate(format!(
+                "the outline ({} segments) is too intricate to check for self-crossings: more \
+                 than {MAX_PAIR_TESTS} segment pairs lie close together; simplify it",
+                segs.len()
+            )));
+        }
+        for (u, &i) in l.iter().enumerate() {
+            for &j in &l[u + 1..] {
+                let (p, q) = (segs[i as usize], segs[j as usize]);
+                if segments_cross(p.0, p.1, q.0, q.1) {
+                    let k = i.min(j) as usize;
+                    first = Some(first.map_or(k, |f| f.min(k)));
+                }
+            }
+        }
+    }
+    Ok(first)
 }
 
 /// Drops repeated vertices (including a closing vertex equal to the first).
@@ -450,5 +535,21 @@ mod tests {
         assert!(Polygon::new(bow, vec![]).is_err());
         let stray = vec![[5.0, 5.0], [6.0, 5.0], [6.0, 6.0]];
         assert!(Polygon::new(ngon(8, 1.0), vec![stray]).is_err());
+    }
+
+    /// Issue "hardening": the check used to be skipped above 20,000 segments.
+    #[test]
+    fn self_crossings_are_found_at_any_segment_count() {
+        for n in [7, 20_001, 100_000] {
+            let mut p = ngon(n, 10.0);
+            assert!(Polygon::new(p.clone(), vec![]).is_ok(), "{n}");
+            // Swap two neighbouring vertices: one small bow tie on a huge outline.
+            p.swap(n / 3, n / 3 + 1);
+            let e = Polygon::new(p, vec![]).unwrap_err().to_string();
+            assert!(e.contains("crosses itself"), "{n}: {e}");
+        }
+        // A hole crossing the outer loop.
+        let hole: Vec<[f64; 2]> = ngon(50, 3.0).iter().map(|v| [v[0] + 8.5, v[1]]).collect();
+        assert!(Polygon::new(ngon(200, 10.0), vec![hole]).is_err());
     }
 }

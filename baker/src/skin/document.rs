@@ -1,11 +1,11 @@
-//! The skin-optics document ([`formats::optics`]) built from model results.
+//! The skin-optics document ([`formats::optics`]) built from model results: what `optics.json`
+//! and every later stage (transport stacks, tables, exports) read.
 
 use formats::optics::{
     self, OpticsDocument, OpticsEntry, OpticsJunction, OpticsLayer, OpticsSurface,
 };
 
-use crate::skin::{ModelKind, SkinOptics};
-use crate::spec::ResolvedEntry;
+use super::{ModelKind, SkinOptics, SkinParams};
 
 pub fn model_name(m: ModelKind) -> &'static str {
     match m {
@@ -14,13 +14,14 @@ pub fn model_name(m: ModelKind) -> &'static str {
     }
 }
 
-pub fn entry(e: &ResolvedEntry, o: &SkinOptics) -> OpticsEntry {
+/// The document entry of `name`, evaluated from `params` as `o`.
+pub fn entry(name: &str, params: &SkinParams, o: &SkinOptics) -> OpticsEntry {
     let j = o.junction;
     let s = o.surface;
     OpticsEntry {
-        name: e.name.clone(),
+        name: name.to_string(),
         model: model_name(o.model).to_string(),
-        inputs: serde_json::to_value(&e.params).expect("parameters serialise"),
+        inputs: serde_json::to_value(params).expect("parameters serialise"),
         layers: o
             .layers
             .iter()

@@ -1,0 +1,211 @@
+//! What a bake of a resolved spec will cost — photon packets and memory — checked against the
+//! spec's [`Limits`] before anything is traced. `baker validate`, `baker plan` and `baker bake`
+//! all call [`check`]; the bake passes its flags (`--photons`, `--threads`, `--no-reuse`), so
+//! a flag that makes a spec too expensive is reported like a spec value.
+//!
+//! # The memory bound
+//!
+//! An upper bound on the bake's peak heap, from the sizes the bake allocates (`baker plan`
+//! prints it; `limits.memory_gib` caps it). With E entries, λ wavelengths, R radial bins, G
+//! simulation groups of at most g entries and T threads:
+//!
+//! - skin: 64 MiB (program, HDF5, thread stacks) + 3 × E·λ·(2R + 12)·8 B (spectral profiles,
+//!   the tables built from them and their encoded bytes) + 2 × 16·T batches × g·R·16 B (the
+//!   tallies of the batches a simulation has in flight, and their reduction);
+//! - fiber, the largest entry (entries are baked one after another): 64 MiB + 3 × one work
+//!   unit's results (u directions × S sections × V·C channels × B bins × 8 B, with their cache
+//!   encoding) + 2T × 18 × B·V·C·8 B (the batch tallies of the slices being traced) + 8192 ×
+//!   V·C·8 B (absorption table) + the encoded tables (stored directions × tables × V·C × B ×
+//!   2 or 4 B).
+//!
+//! The bound is checked against `/usr/bin/time -v` on the shipped specs (README, "Resource
+//! limits").
+
+use super::error::{SpecError, SpecErrors};
+use super::fiber::FiberSpec;
+use super::limits::count_text;
+use super::{SkinSpec, Spec};
+
+/// What the bake's flags change about its cost.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Overrides {
+    /// `--photons`: per wavelength and simulation (skin), per direction (fiber).
+    pub photons: Option<u64>,
+    /// Worker threads the bake runs (`--threads`, default every core).
+    pub threads: usize,
+    /// `--no-reuse`: one simulation per skin entry.
+    pub no_reuse: bool,
+    /// `--optics-only`: no transport at all.
+    pub optics_only: bool,
+}
+
+impl Overrides {
+    /// No flags, every core of this machine.
+    pub fn none() -> Overrides {
+        Overrides {
+            threads: rayon::current_num_threads(),
+            ..Overrides::default()
+        }
+    }
+}
+
+/// The cost of a bake.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Cost {
+    /// Photon packets traced, at most (skin: with every wavelength boosted to the cap).
+    pub photons: f64,
+    /// Upper bound of the peak heap, bytes ([module docs](self)).
+    pub memory_bytes: f64,
+}
+
+const BASE_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// The cost of baking `spec` with `o`; an error if it is over the spec's limits.
+pub fn check(spec: &Spec, o: &Overrides) -> Result<Cost, SpecErrors> {
+    let (cost, at, file, limits) = match spec {
+        Spec::Skin(s) => (skin_cost(s, o), s.photons_at, &s.file, &s.limits),
+        Spec::Fiber(s) => (fiber_cost(s, o), s.photons_at, &s.file, &s.limits),
+    };
+    let mut errors = Vec::new();
+    let flag = o
+        .photons
+        .map_or(String::new(), |p| format!(" (with --photons {p})"));
+    if cost.photons > limits.photons {
+        errors.push(over(
+            file,
+            at,
+            match spec {
+                Spec::Skin(_) => "profiles.photons",
+                Spec::Fiber(_) => "bake.photons_per_direction",
+            },
+            format!(
+                "the bake traces up to {:.3e} photon packets{flag}",
+                cost.photons
+            ),
+            "photons",
+            format!("{:.3e}", limits.photons),
+        ));
+    }
+    if cost.memory_bytes > limits.memory_gib * GIB {
+        errors.push(over(
+            file,
+            (1, 1),
+            "spec",
+            format!(
+                "the bake needs up to {:.1} GiB of memory{flag} on {} thread(s)",
+                cost.memory_bytes / GIB,
+                o.threads
+            ),
+            "memory_gib",
+            format!("{} GiB", limits.memory_gib),
+        ));
+    }
+    if errors.is_empty() {
+        Ok(cost)
+    } else {
+        Err(SpecErrors(errors))
+    }
+}
+
+fn over(
+    file: &str,
+    at: (u64, u64),
+    field: &str,
+    what: String,
+    name: &str,
+    limit: String,
+) -> SpecError {
+    SpecError::Invalid {
+        file: file.to_string(),
+        line: at.0,
+        column: at.1,
+        field: field.to_string(),
+        message: format!(
+            "{what}, over the limit of {limit} (`limits.{name}`); ask for less, or raise \
+             `limits.{name}` in the spec if you mean it"
+        ),
+    }
+}
+
+fn skin_cost(s: &SkinSpec, o: &Overrides) -> Cost {
+    let p = &s.profiles;
+    let e = s.entries.len() as f64;
+    let nl = s.wavelengths.len() as f64;
+    let nr = crate::transport::RadialBins::fine_then_log_count(
+        p.dr_min_mm,
+        p.growth,
+        p.r_max_mm,
+        s.limits.radial_bins,
+    ) as f64;
+    let (groups, largest) = if o.no_reuse {
+        (s.entries.len(), 1)
+    } else {
+        (s.groups, s.largest_group)
+    };
+    let photons_each = o.photons.unwrap_or(p.photons) as f64;
+    let pilots = if p.max_photon_boost > 1 {
+        20_000.0
+    } else {
+        0.0
+    };
+    let photons = if o.optics_only {
+        0.0
+    } else {
+        groups as f64 * nl * (photons_each * p.max_photon_boost as f64 + pilots)
+    };
+    let t = o.threads.max(1) as f64;
+    let profiles = 3.0 * e * nl * (2.0 * nr + 12.0) * 8.0;
+    let in_flight = 2.0 * 16.0 * t * largest as f64 * (nr + 3.0) * 16.0;
+    Cost {
+        photons,
+        memory_bytes: BASE_BYTES + profiles + if o.optics_only { 0.0 } else { in_flight },
+    }
+}
+
+fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
+    let st = &s.bake;
+    let per_direction = o.photons.unwrap_or(st.photons).div_ceil(st.batch).max(2) * st.batch;
+    let grid_bins = ((180.0 / st.res_deg).round() * (360.0 / st.res_deg).round()).max(1.0);
+    let t = o.threads.max(1) as f64;
+    let value_bytes = match st.precision {
+        formats::Precision::F16 => 2.0,
+        formats::Precision::F32 => 4.0,
+    };
+    let mut photons = 0.0;
+    let mut memory: f64 = 0.0;
+    for e in &s.fibers {
+        let sections = e.population.len() as f64;
+        let stored = e.stored_directions as f64;
+        photons += stored * sections * per_direction as f64;
+        let nch = (e.variants.len() * st.channels_per_variant()) as f64;
+        let per_slice = nch * grid_bins * 8.0;
+        let unit = crate::fiber::bake::unit_len(e.stored_directions) as f64 * sections * per_slice;
+        let tables = stored
+            * (sections + f64::from(u8::from(sections > 1.0)))
+            * nch
+            * grid_bins
+            * value_bytes;
+        let in_flight = 2.0 * t * 18.0 * per_slice;
+        memory = memory.max(3.0 * unit + in_flight + 8192.0 * nch * 8.0 + tables);
+    }
+    Cost {
+        photons,
+        memory_bytes: BASE_BYTES + memory,
+    }
+}
+
+impl Cost {
+    /// `1.2e10 photon packets, memory ≤ 0.4 GiB`.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} photon packets, memory ≤ {:.2} GiB",
+            if self.photons < 1e6 {
+                count_text(self.photons as u64)
+            } else {
+                format!("{:.3e}", self.photons)
+            },
+            self.memory_bytes / GIB
+        )
+    }
+}

@@ -1,0 +1,185 @@
+//! Resource budgets: what a spec may ask for before the baker allocates it.
+//!
+//! Every size a spec controls is computed from the spec before anything of that size is
+//! allocated, and checked against a limit. The defaults are far above the shipped specs and
+//! far below what would abort the process on a workstation; a spec that needs more raises them
+//! deliberately in a top-level `limits:` block (both spec kinds):
+//!
+//! ```yaml
+//! limits:
+//!   wavelengths: 1000      # per spec (skin) or per `bake.lambda_nm` (fiber)
+//!   memory_gib: 64
+//! ```
+//!
+//! | limit | default | what it bounds | the shipped specs need |
+//! |---|---|---|---|
+//! | `wavelengths` | 471 | wavelengths of a skin spec or of a fiber bake's spectrum (1 nm steps over 360–830 nm) | 31 |
+//! | `radial_bins` | 4096 | radial bins of the skin profiles (`profiles.radial`) | 239 |
+//! | `entries` | 10,000 | entries of a spec, sweeps expanded | 126 |
+//! | `photons` | 1e13 | photon packets a bake traces (skin: entries × wavelengths × photons × boost; fiber: directions × sections × photons) | 3.0e12 (`fibers-thesis.yaml`) |
+//! | `variants` | 1024 | dyeings of one fiber entry (sweep dyes × depths of shade, + undyed) | 4 |
+//! | `table_gib` | 8 | one fiber entry's tables, uncompressed f32 (stored directions × channels × bins × tables) | 0.6 |
+//! | `mask_pixels` | 16,777,216 | pixels of a mask image (4096²), checked from its header before decoding | 40,000 |
+//! | `polygon_vertices` | 100,000 | vertices of a polygon section (CSV or mask outline) | 1,200 |
+//! | `memory_gib` | 16 | the bake's memory bound, as `baker plan` prints it | 0.4 |
+
+use super::raw::Spanned;
+use super::resolve::{loc, Ctx};
+
+/// The limits of one spec (defaults, raised by its `limits:` block).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Limits {
+    pub wavelengths: u64,
+    pub radial_bins: u64,
+    pub entries: u64,
+    pub photons: f64,
+    pub variants: u64,
+    pub table_gib: f64,
+    pub mask_pixels: u64,
+    pub polygon_vertices: u64,
+    pub memory_gib: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            wavelengths: 471,
+            radial_bins: 4096,
+            entries: 10_000,
+            photons: 1e13,
+            variants: 1024,
+            table_gib: 8.0,
+            mask_pixels: 4096 * 4096,
+            polygon_vertices: 100_000,
+            memory_gib: 16.0,
+        }
+    }
+}
+
+/// `limits:` as written.
+#[derive(Debug, serde::Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct RawLimits {
+    pub wavelengths: Option<Spanned<f64>>,
+    pub radial_bins: Option<Spanned<f64>>,
+    pub entries: Option<Spanned<f64>>,
+    pub photons: Option<Spanned<f64>>,
+    pub variants: Option<Spanned<f64>>,
+    pub table_gib: Option<Spanned<f64>>,
+    pub mask_pixels: Option<Spanned<f64>>,
+    pub polygon_vertices: Option<Spanned<f64>>,
+    pub memory_gib: Option<Spanned<f64>>,
+}
+
+/// `n` with thousands separators (`400,000,000,001`), for counts in messages.
+pub fn count_text(n: u64) -> String {
+    let s = n.to_string();
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i > 0 && (s.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+impl Ctx {
+    /// The limits of a spec: defaults, each raised (or lowered) by `limits:`. Each limit has a
+    /// ceiling of its own, so no limit can make a size overflow the arithmetic that checks it.
+    pub(super) fn limits(&mut self, raw: Option<&Spanned<RawLimits>>) -> Limits {
+        let mut l = Limits::default();
+        let Some(raw) = raw else { return l };
+        let r = &raw.value;
+        let whole =
+            |this: &mut Self, field: &str, v: &Option<Spanned<f64>>, hi: f64, out: &mut u64| {
+                if let Some(v) = v {
+                    if let Some(x) = this.in_range(field, v, 1.0, hi, false) {
+                        if x.fract() == 0.0 {
+                            *out = x as u64;
+                        } else {
+                            this.invalid(loc(v), field, format!("{x} is not a whole number"));
+                        }
+                    }
+                }
+            };
+        whole(
+            self,
+            "limits.wavelengths",
+            &r.wavelengths,
+            1e6,
+            &mut l.wavelengths,
+        );
+        whole(
+            self,
+            "limits.radial_bins",
+            &r.radial_bins,
+            1e6,
+            &mut l.radial_bins,
+        );
+        whole(self, "limits.entries", &r.entries, 1e7, &mut l.entries);
+        whole(self, "limits.variants", &r.variants, 1e6, &mut l.variants);
+        whole(
+            self,
+            "limits.mask_pixels",
+            &r.mask_pixels,
+            1e10,
+            &mut l.mask_pixels,
+        );
+        whole(
+            self,
+            "limits.polygon_vertices",
+            &r.polygon_vertices,
+            1e8,
+            &mut l.polygon_vertices,
+        );
+        l.photons = self.opt_range("limits.photons", &r.photons, 1.0, 1e18, false, l.photons);
+        l.table_gib = self.opt_range(
+            "limits.table_gib",
+            &r.table_gib,
+            0.0,
+            1e6,
+            true,
+            l.table_gib,
+        );
+        l.memory_gib = self.opt_range(
+            "limits.memory_gib",
+            &r.memory_gib,
+            0.0,
+            1e6,
+            true,
+            l.memory_gib,
+        );
+        l
+    }
+
+    /// Records that `what` (computed from the value at `at`) is over limit `name`.
+    pub(super) fn over_limit(
+        &mut self,
+        at: (u64, u64),
+        field: &str,
+        what: String,
+        name: &str,
+        limit: String,
+    ) {
+        self.invalid(
+            at,
+            field,
+            format!(
+                "{what}, over the limit of {limit} (`limits.{name}`); ask for less, or raise \
+                 `limits.{name}` in the spec if you mean it"
+            ),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn counts_read_well() {
+        assert_eq!(super::count_text(0), "0");
+        assert_eq!(super::count_text(999), "999");
+        assert_eq!(super::count_text(1000), "1,000");
+        assert_eq!(super::count_text(400_000_000_001), "400,000,000,001");
+    }
+}
