@@ -117,7 +117,11 @@ pub fn read_bytes(
             regular,
         });
     }
-    let f = std::fs::File::open(path).map_err(io)?;
+    let f = if ft.is_fifo_like() {
+        open_fifo_for_reading(path).map_err(io)?
+    } else {
+        std::fs::File::open(path).map_err(io)?
+    };
     let mut out = Vec::with_capacity(if regular { meta.len() as usize } else { 8192 });
     f.take(max_bytes + 1).read_to_end(&mut out).map_err(io)?;
     if out.len() as u64 > max_bytes {
@@ -130,6 +134,44 @@ pub fn read_bytes(
         });
     }
     Ok(out)
+}
+
+/// `is_fifo` as a method on the file type (for readability above).
+trait FifoLike {
+    fn is_fifo_like(&self) -> bool;
+}
+
+impl FifoLike for std::fs::FileType {
+    fn is_fifo_like(&self) -> bool {
+        use std::os::unix::fs::FileTypeExt as _;
+        self.is_fifo()
+    }
+}
+
+/// Opens a FIFO without waiting for a writer (a plain `open` blocks until one comes): with a
+/// writer (`<(generate-spec)`) reads block for its data as usual; without one they see the end
+/// at once.
+fn open_fifo_for_reading(path: &Path) -> std::io::Result<std::fs::File> {
+    use std::os::unix::fs::OpenOptionsExt as _;
+    use std::os::unix::io::AsRawFd as _;
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)?;
+    set_blocking(f.as_raw_fd())?;
+    Ok(f)
+}
+
+/// Clears `O_NONBLOCK` on `fd`.
+pub fn set_blocking(fd: std::os::unix::io::RawFd) -> std::io::Result<()> {
+    // SAFETY: fcntl on a file descriptor this process owns.
+    unsafe {
+        let flags = libc::fcntl(fd, libc::F_GETFL);
+        if flags < 0 || libc::fcntl(fd, libc::F_SETFL, flags & !libc::O_NONBLOCK) < 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+    }
+    Ok(())
 }
 
 /// [`read_bytes`] as UTF-8 text, without a leading byte-order mark.
@@ -189,5 +231,11 @@ mod tests {
             Err(FileError::NotText { offset: 3, .. })
         ));
         assert_eq!(read_text(Path::new("/dev/null"), 10, "x").unwrap(), "");
+        // A FIFO nobody writes to reads as empty instead of blocking.
+        let fifo = dir.path().join("fifo");
+        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+        // SAFETY: a valid path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        assert_eq!(read_text(&fifo, 10, "x").unwrap(), "");
     }
 }

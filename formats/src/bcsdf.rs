@@ -447,10 +447,7 @@ impl Bcsdf {
     /// Reads and checks a file.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, TableError> {
         let p = path.as_ref();
-        let bytes = std::fs::read(p).map_err(|source| TableError::Io {
-            path: p.to_path_buf(),
-            source,
-        })?;
+        let bytes = crate::table::read_file(p)?;
         Self::from_bytes(bytes).map_err(|e| match e {
             TableError::Format(m) => TableError::Format(format!("{}: {m}", p.display())),
             other => other,
@@ -534,6 +531,14 @@ impl Bcsdf {
             &d.scale[i * nv * nc..(i + 1) * nv * nc],
             bins,
         );
+        // Values are finite (a consistent checksum does not make NaN or ∞ data valid; RGB
+        // values can be slightly negative out of gamut, as in the skin profiles).
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            return Err(TableError::Invalid(format!(
+                "chunk {i}: value {k} is {} (BCSDF values are finite)",
+                values[k]
+            )));
+        }
         let (cdf_theta, cdf_phi, norm) = sampling_cdfs(d, &values);
         Ok(Slice {
             values,
@@ -541,6 +546,12 @@ impl Bcsdf {
             cdf_phi,
             norm,
         })
+    }
+
+    /// Decodes every stored slice once (checksums, sizes, finite values) without keeping
+    /// them: what a converter calls before it writes anything derived from the table.
+    pub fn verify(&self) -> Result<(), TableError> {
+        (0..self.dir.n_wi()).try_for_each(|i| self.decode(i).map(|_| ()))
     }
 
     /// Stored slice `i`, decoded once and kept.

@@ -296,6 +296,26 @@ impl ProfileTable {
                 error_rgb: [f64::NAN; 3],
             },
         };
+        // FORMAT.md: profiles, albedos and fits are finite (variances > 0); only r99_mm may
+        // be NaN, and this reader does not use it.
+        let finite = |what: &str, v: &[f64]| match v.iter().find(|x| !x.is_finite()) {
+            Some(x) => Err(TableError::Invalid(format!(
+                "{name}/{what}: holds {x} (values are finite)"
+            ))),
+            None => Ok(()),
+        };
+        finite("rd_rgb_per_mm2", rd_rgb_per_mm2.as_flattened())?;
+        finite("albedo_rgb", &a)?;
+        finite("gaussians/weight_rgb", gaussians.weight_rgb.as_flattened())?;
+        if gaussians
+            .variance_mm2
+            .iter()
+            .any(|v| !(v.is_finite() && *v > 0.0))
+        {
+            return Err(TableError::Invalid(format!(
+                "{name}/gaussians/variance_mm2: variances are finite and > 0"
+            )));
+        }
         Ok(ProfileData {
             r_mm,
             r_edges_mm,
@@ -303,6 +323,15 @@ impl ProfileTable {
             albedo_rgb: [a[0], a[1], a[2]],
             gaussians,
         })
+    }
+
+    /// Decodes every entry (checksums, shapes, finite values) and every other array of the
+    /// file: what a converter calls before it writes anything derived from the table.
+    pub fn verify(&self) -> Result<(), TableError> {
+        self.index.verify()?;
+        self.entries
+            .iter()
+            .try_for_each(|e| self.data(&e.name).map(|_| ()))
     }
 }
 

@@ -571,10 +571,7 @@ impl TableFile {
     /// Reads and validates a file.
     pub fn read(path: impl AsRef<Path>) -> Result<TableFile, TableError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| TableError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = read_file(path)?;
         TableFile::from_bytes(&bytes).map_err(|e| match e {
             TableError::Format(m) => TableError::Format(format!("{}: {m}", path.display())),
             other => other,
@@ -680,10 +677,7 @@ impl TableIndex {
     /// Reads a file's header and directory.
     pub fn open(path: impl AsRef<Path>) -> Result<TableIndex, TableError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|source| TableError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = read_file(path)?;
         TableIndex::from_bytes(bytes).map_err(|e| match e {
             TableError::Format(m) => TableError::Format(format!("{}: {m}", path.display())),
             other => other,
@@ -845,6 +839,11 @@ impl TableIndex {
     }
 
     /// Decodes (and checks) array number `i` in file order.
+    /// Decodes every array once (checksums, sizes) without keeping them.
+    pub fn verify(&self) -> Result<(), TableError> {
+        (0..self.entries.len()).try_for_each(|i| self.read_at(i).map(|_| ()))
+    }
+
     pub fn read_at(&self, i: usize) -> Result<Array, TableError> {
         let e = self
             .entries
@@ -923,6 +922,28 @@ pub(crate) fn decompress(src: &[u8], raw_len: u64, what: &str) -> Result<Vec<u8>
         )));
     }
     Ok(out)
+}
+
+/// Reads a whole table file. Only a regular file is read: a directory, device, FIFO or socket
+/// is an error naming what it is (reading `/dev/zero` would never end).
+pub fn read_file(path: &Path) -> Result<Vec<u8>, TableError> {
+    let io = |source| TableError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "a directory"
+        } else {
+            "not a regular file (a device, FIFO or socket)"
+        };
+        return Err(TableError::Invalid(format!(
+            "{}: is {what}; a table is a regular file",
+            path.display()
+        )));
+    }
+    std::fs::read(path).map_err(io)
 }
 
 /// Lookup table of [`crc32`].

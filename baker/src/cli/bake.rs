@@ -104,6 +104,8 @@ impl BakeArgs {
         };
         let mut r = Runner::new(cache, Events::new(progress), self.shard);
         r.require_cached = self.require_cached;
+        // SIGINT/SIGTERM stop the units at their next batch.
+        r.cancel = interrupt::cancel();
         r
     }
 }
@@ -171,7 +173,7 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
             let dest = if a.shard.is_some() {
                 None
             } else {
-                Some(destination(&a, &root, &stem, spec)?)
+                Some(destination(&a, &root, path, &stem, spec)?)
             };
             let baked = match spec {
                 Spec::Skin(s) => pool.install(|| bake_spec(&a, path, s, &runner, dest.as_ref()))?,
@@ -242,6 +244,7 @@ pub const SUBSET_DIR: &str = "subset";
 fn destination(
     a: &BakeArgs,
     root: &OutRoot,
+    path: &Path,
     stem: &str,
     spec: &Spec,
 ) -> anyhow::Result<Destination> {
@@ -258,9 +261,14 @@ fn destination(
     let photons = a.photons.unwrap_or(spec_photons);
     let partial = selected < spec.entries().len() || photons < spec_photons || a.optics_only;
     let finished = manifest_summary(&full_dir);
-    let bigger = finished.as_ref().is_some_and(|m| {
-        partial || (m.spec_sha256 == spec_sha(spec) && m.photons.is_some_and(|p| p > photons))
-    });
+    // The same spec and flags as the finished bake: this is that bake again (up to date, or
+    // to repair).
+    let same = std::fs::read_to_string(full_dir.join(crate::output::STAMP_FILE))
+        .is_ok_and(|s| s.trim() == super::pipeline::stamp(a, path, spec_sha(spec)));
+    let bigger = !same
+        && finished.as_ref().is_some_and(|m| {
+            partial || (m.spec_sha256 == spec_sha(spec) && m.photons.is_some_and(|p| p > photons))
+        });
     let subset = !a.replace && bigger;
     let rel = if subset {
         format!("{stem}/{SUBSET_DIR}")
@@ -302,7 +310,6 @@ fn spec_sha(spec: &Spec) -> &str {
 /// What a finished bake's manifest says about it.
 pub struct ManifestSummary {
     pub spec_sha256: String,
-    pub entries: usize,
     pub photons: Option<u64>,
     /// First components of the paths of its files.
     pub top_level: std::collections::BTreeSet<String>,
@@ -327,7 +334,6 @@ pub fn manifest_summary(dir: &Path) -> Option<ManifestSummary> {
     let photons = m["settings"]["photons"].as_u64();
     Some(ManifestSummary {
         spec_sha256: m["spec_sha256"].as_str().unwrap_or_default().to_string(),
-        entries: m["entries"].as_array().map_or(0, Vec::len),
         photons,
         top_level,
         units: m["units"]

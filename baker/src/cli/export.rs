@@ -4,6 +4,8 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::UsageError;
+
 use crate::export::ExportRequest;
 
 #[derive(Debug, Args)]
@@ -33,6 +35,21 @@ pub fn run(a: ExportArgs) -> anyhow::Result<()> {
     let mut head = [0u8; 8];
     {
         use std::io::Read as _;
+        // A table is a regular file: a directory or device is named as such, not opened.
+        match std::fs::metadata(&req.table) {
+            Ok(m) if m.is_file() => {}
+            Ok(m) => {
+                return Err(UsageError(format!(
+                    "{}: is {}; expected a baked table (profiles.bkt or a .bcsdf file)",
+                    req.table.display(),
+                    crate::files::special_kind(&m.file_type()).unwrap_or("not a regular file")
+                ))
+                .into())
+            }
+            Err(e) => {
+                return Err(UsageError(format!("{}: {e}", req.table.display())).into());
+            }
+        }
         let mut f = std::fs::File::open(&req.table)
             .map_err(|e| anyhow::anyhow!("cannot open {}: {e}", req.table.display()))?;
         let _ = f.read(&mut head)?;
@@ -40,7 +57,7 @@ pub fn run(a: ExportArgs) -> anyhow::Result<()> {
     match &head {
         b"BAKERTBL" => crate::export::skin::run(&req),
         b"BAKERFIB" => crate::export::hair::run(&req),
-        _ => Err(super::UsageError(format!(
+        _ => Err(UsageError(format!(
             "{}: not a baker table (expected profiles.bkt or a .bcsdf file)",
             req.table.display()
         ))

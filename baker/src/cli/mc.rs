@@ -58,8 +58,8 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
         return Err(UsageError("--photons must be at least 1".into()).into());
     }
     if let Some(path) = &a.mci_in {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let text = crate::files::read_text(path, crate::files::MAX_SPEC_BYTES, "an .mci file")
+            .map_err(|e| UsageError(e.to_string()))?;
         let runs =
             mcml::parse_mci(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
         for (k, run) in runs.iter().enumerate() {
@@ -113,8 +113,8 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
 }
 
 pub fn read_stack(path: &std::path::Path) -> anyhow::Result<Stack> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = crate::files::read_text(path, crate::files::MAX_SPEC_BYTES, "a stack file")
+        .map_err(|e| UsageError(e.to_string()))?;
     let file: transport::stack::StackFile =
         serde_json::from_str(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
     file.into_stack()

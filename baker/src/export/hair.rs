@@ -80,6 +80,13 @@ pub fn run(req: &ExportRequest) -> anyhow::Result<()> {
     }
     let table =
         Bcsdf::open(&req.table).with_context(|| format!("reading {}", req.table.display()))?;
+    // Every chunk is checked (checksums, finite values) before anything is written.
+    table.verify().with_context(|| {
+        format!(
+            "{}: the table is damaged; nothing was exported",
+            req.table.display()
+        )
+    })?;
     let variants = &table.dir.variants;
     let variant = match &req.entry {
         None => 0,
@@ -111,6 +118,17 @@ pub fn run(req: &ExportRequest) -> anyhow::Result<()> {
         .into());
     }
     let fit = fit_table(&table, variant, &req.table.display().to_string())?;
+    let p = &fit.report.params;
+    let finite = [p.eta, p.beta_m, p.beta_n, p.alpha_deg, fit.report.rel_l1]
+        .iter()
+        .chain(&p.sigma_a)
+        .all(|x| x.is_finite());
+    if !finite {
+        return Err(anyhow::anyhow!(
+            "{}: the Chiang fit is not finite; nothing was exported",
+            req.table.display()
+        ));
+    }
     let text = match target {
         "chiang" => chiang_json(&fit),
         "pbrt" => pbrt(&fit),

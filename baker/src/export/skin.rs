@@ -226,12 +226,18 @@ pub fn run(req: &ExportRequest) -> anyhow::Result<()> {
             names.join(", ")
         ))
     })?;
-    let bytes =
-        std::fs::read(&req.table).with_context(|| format!("reading {}", req.table.display()))?;
+    let bytes = formats::table::read_file(&req.table)?;
     let index = TableIndex::from_bytes(bytes.clone())
         .with_context(|| format!("reading {}", req.table.display()))?;
     let table = ProfileTable::from_bytes(bytes)
         .with_context(|| format!("{}: not a skin profile table", req.table.display()))?;
+    // Every chunk is checked (checksums, finite values) before anything is written.
+    table.verify().with_context(|| {
+        format!(
+            "{}: the table is damaged; nothing was exported",
+            req.table.display()
+        )
+    })?;
     let names: Vec<String> = match &req.entry {
         Some(e) if table.position(e).is_some() => vec![e.clone()],
         Some(e) => {
@@ -249,6 +255,20 @@ pub fn run(req: &ExportRequest) -> anyhow::Result<()> {
         .iter()
         .map(|n| fit_entry(&table, &index, n))
         .collect::<anyhow::Result<Vec<_>>>()?;
+    // A fit that is not finite would write `null` or NaN parameters into a renderer's file.
+    if let Some(f) = fits.iter().find(|f| {
+        !(f.eta.is_finite() && f.f0.is_finite())
+            || f.burley
+                .iter()
+                .any(|b| !(b.a.is_finite() && b.d_mm.is_finite() && b.d_mm > 0.0))
+    }) {
+        return Err(anyhow::anyhow!(
+            "{}: entry {}: the Burley fit is not finite (A, d = {:?}); nothing was exported",
+            req.table.display(),
+            f.name,
+            f.burley.iter().map(|b| (b.a, b.d_mm)).collect::<Vec<_>>()
+        ));
+    }
     let prov = Provenance::from_table(&table, &req.table.display().to_string());
     let text = write(target, &fits, &prov);
     match &req.output {

@@ -56,12 +56,41 @@ pub fn target(path: &Path) -> io::Result<Target> {
     }
 }
 
-/// Opens a stream target for writing.
+/// How long a write to a FIFO waits for a process to read it.
+const FIFO_READER_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// Opens a stream target for writing. A FIFO nobody reads is an error after
+/// [`FIFO_READER_WAIT`] (a plain `open` would wait forever).
 fn open_stream(path: &Path, t: Target) -> io::Result<Box<dyn Write>> {
+    use std::os::unix::fs::OpenOptionsExt as _;
+    use std::os::unix::io::AsRawFd as _;
     Ok(match t {
         Target::Stdout => Box::new(io::stdout().lock()),
         Target::Socket => Box::new(std::os::unix::net::UnixStream::connect(path)?),
-        _ => Box::new(fs::OpenOptions::new().write(true).open(path)?),
+        _ => {
+            let t0 = std::time::Instant::now();
+            let f = loop {
+                match fs::OpenOptions::new()
+                    .write(true)
+                    .custom_flags(libc::O_NONBLOCK)
+                    .open(path)
+                {
+                    Ok(f) => break f,
+                    Err(e) if e.raw_os_error() == Some(libc::ENXIO) => {
+                        if t0.elapsed() > FIFO_READER_WAIT {
+                            return Err(io::Error::other(format!(
+                                "{} is a FIFO that no process reads",
+                                crate::files::Shown(path)
+                            )));
+                        }
+                        std::thread::sleep(std::time::Duration::from_millis(10));
+                    }
+                    Err(e) => return Err(e),
+                }
+            };
+            crate::files::set_blocking(f.as_raw_fd())?;
+            Box::new(f)
+        }
     })
 }
 

@@ -101,11 +101,42 @@ pub fn check(spec: &Spec, o: &Overrides) -> Result<Cost, SpecErrors> {
             format!("{} GiB", limits.memory_gib),
         ));
     }
+    // The process's own address-space limit (`ulimit -v`, a batch system's memory limit): a
+    // bake that cannot fit is refused now rather than aborted by a failed allocation later.
+    if let Some(avail) = address_space_bytes().map(|b| 0.75 * b) {
+        if cost.memory_bytes > avail && cost.memory_bytes <= limits.memory_gib * GIB {
+            errors.push(SpecError::Invalid {
+                file: file.to_string(),
+                line: 1,
+                column: 1,
+                field: "spec".into(),
+                message: format!(
+                    "the bake needs up to {:.1} GiB of memory{flag} on {} thread(s), but this \
+                     process may use {:.1} GiB (its address-space limit, `ulimit -v`, with room \
+                     for the program); ask for less or run with a higher limit",
+                    cost.memory_bytes / GIB,
+                    o.threads,
+                    avail / GIB
+                ),
+            });
+        }
+    }
     if errors.is_empty() {
         Ok(cost)
     } else {
         Err(SpecErrors(errors))
     }
+}
+
+/// The soft address-space limit of this process, bytes (`None`: unlimited).
+fn address_space_bytes() -> Option<f64> {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes one rlimit struct.
+    let ok = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0;
+    (ok && r.rlim_cur != libc::RLIM_INFINITY).then_some(r.rlim_cur as f64)
 }
 
 fn over(

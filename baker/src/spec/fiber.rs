@@ -554,7 +554,10 @@ impl Ctx {
                                 loc(&r.step),
                                 "bake.lambda_nm.step",
                                 format!(
-                                    "{a}–{e} nm in steps of {st} nm gives {} wavelengths",
+                                    "{}–{} nm in steps of {} nm gives {} wavelengths",
+                                    super::error::num(a),
+                                    super::error::num(e),
+                                    super::error::num(st),
                                     if n < 1e15 {
                                         count_text(n as u64)
                                     } else {

@@ -35,8 +35,26 @@ pub const SHARED_KEYS: [&str; 2] = ["version", "limits"];
 /// with the field and what it allows); only a text with keys of both kinds, or of neither, is
 /// an error here.
 pub fn detect(file: &str, text: &str) -> Result<SpecKind, SpecError> {
-    let keys: Vec<String> = match serde_saphyr::from_str::<BTreeMap<String, IgnoredAny>>(text) {
+    let parsed = serde_saphyr::from_str_with_options::<BTreeMap<String, IgnoredAny>>(
+        text,
+        super::resolve::yaml_options(),
+    );
+    let keys: Vec<String> = match parsed {
         Ok(map) => map.into_keys().collect(),
+        // Over the parser's budgets (an alias bomb, deep nesting): that is the error, whatever
+        // the kind.
+        Err(e) if is_budget(&e.to_string()) => {
+            let (line, column) = e
+                .location()
+                .map(|l| (l.line(), l.column()))
+                .unwrap_or((1, 1));
+            return Err(SpecError::Syntax {
+                file: file.to_string(),
+                line,
+                column,
+                message: super::syntax::clean(&e.to_string()),
+            });
+        }
         // Not a mapping, or broken YAML: the skin parser gives the precise message, unless the
         // text names a fiber key at the start of a line (so a fiber spec with a typo still
         // gets the fiber parser's message).
@@ -100,13 +118,12 @@ pub fn detect(file: &str, text: &str) -> Result<SpecKind, SpecError> {
             let near = |set: &[&str]| {
                 unknown
                     .iter()
-                    .flat_map(|u| set.iter().map(move |k| strsim::damerau_levenshtein(u, k)))
-                    .min()
-                    .unwrap_or(usize::MAX)
+                    .flat_map(|u| set.iter().map(move |k| strsim::jaro_winkler(u, k)))
+                    .fold(0.0f64, f64::max)
             };
-            let (skin_d, fiber_d) = (near(&SKIN_KEYS), near(&FIBER_KEYS));
-            if skin_d.min(fiber_d) <= 3 {
-                return Ok(if fiber_d < skin_d {
+            let (skin_s, fiber_s) = (near(&SKIN_KEYS), near(&FIBER_KEYS));
+            if skin_s.max(fiber_s) >= 0.85 {
+                return Ok(if fiber_s > skin_s {
                     SpecKind::Fiber
                 } else {
                     SpecKind::Skin
@@ -131,6 +148,11 @@ pub fn detect(file: &str, text: &str) -> Result<SpecKind, SpecError> {
             })
         }
     }
+}
+
+/// A serde-saphyr error that is a breached safety budget, not a syntax or type error.
+fn is_budget(m: &str) -> bool {
+    m.contains("budget breached") || m.contains("recursion limit exceeded")
 }
 
 #[cfg(test)]

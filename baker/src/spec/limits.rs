@@ -16,7 +16,7 @@
 //! | `wavelengths` | 471 | wavelengths of a skin spec or of a fiber bake's spectrum (1 nm steps over 360–830 nm) | 31 |
 //! | `radial_bins` | 4096 | radial bins of the skin profiles (`profiles.radial`) | 239 |
 //! | `entries` | 10,000 | entries of a spec, sweeps expanded | 126 |
-//! | `photons` | 1e13 | photon packets a bake traces (skin: entries × wavelengths × photons × boost; fiber: directions × sections × photons) | 3.0e12 (`fibers-thesis.yaml`) |
+//! | `photons` | 1e11 | photon packets a bake traces (skin: groups × wavelengths × photons × boost; fiber: directions × sections × photons); about a day on 2 cores | 7.4e8 (`fitzpatrick.yaml`; `fibers-thesis.yaml` raises it to 1e13 for its 3.0e12) |
 //! | `variants` | 1024 | dyeings of one fiber entry (sweep dyes × depths of shade, + undyed) | 4 |
 //! | `table_gib` | 8 | one fiber entry's tables, uncompressed f32 (stored directions × channels × bins × tables) | 0.6 |
 //! | `mask_pixels` | 16,777,216 | pixels of a mask image (4096²), checked from its header before decoding | 40,000 |
@@ -46,7 +46,7 @@ impl Default for Limits {
             wavelengths: 471,
             radial_bins: 4096,
             entries: 10_000,
-            photons: 1e13,
+            photons: 1e11,
             variants: 1024,
             table_gib: 8.0,
             mask_pixels: 4096 * 4096,

@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::error::{SpecError, SpecErrors};
+use super::error::{num, SpecError, SpecErrors};
 use super::limits::{count_text, Limits};
 use super::raw::{OneOrMany, RawCollagen, RawLayerValues, RawParams, RawSpec, Spanned, Token};
 use super::{names, syntax};
@@ -163,12 +163,21 @@ pub(super) fn parse_yaml<T: serde::de::DeserializeOwned>(
     })
 }
 
+/// How specs are parsed: serde-saphyr's budgets (nodes, aliases, depth: an alias bomb or a
+/// deeply nested document is an error, not an exhausted machine), and explicit tags it does
+/// not know (`!!python/object`) rejected rather than ignored.
+pub(super) fn yaml_options() -> serde_saphyr::Options {
+    serde_saphyr::options! {
+        reject_unsupported_tags: true,
+    }
+}
+
 /// serde-saphyr's error as it comes, at its line and column.
 pub(super) fn parse_plain<T: serde::de::DeserializeOwned>(
     file: &str,
     text: &str,
 ) -> Result<T, SpecError> {
-    serde_saphyr::from_str(text).map_err(|e| {
+    serde_saphyr::from_str_with_options(text, yaml_options()).map_err(|e| {
         let (line, column) = e
             .location()
             .map(|l| (l.line(), l.column()))
@@ -257,8 +266,13 @@ impl Ctx {
         if ok {
             Some(x)
         } else {
-            let allowed = format!("{}{lo}, {hi}]", if open_lo { "(" } else { "[" });
-            self.out_of_range(loc(v), field, format!("{x}"), allowed);
+            let allowed = format!(
+                "{}{}, {}]",
+                if open_lo { "(" } else { "[" },
+                num(lo),
+                num(hi)
+            );
+            self.out_of_range(loc(v), field, num(x), allowed);
             None
         }
     }
@@ -387,18 +401,23 @@ impl Ctx {
             if !expand_sweeps {
                 continue;
             }
+            let mut bad_name = false;
             for point in expand(&merged) {
                 let name = fill_template(&template.value, &point);
                 if let Err(m) = names::check(&name) {
-                    self.invalid(
-                        loc(&template),
-                        "name",
-                        format!(
-                            "the template {:?} gives the name {}",
-                            template.value,
-                            names::message(&name, &m)
-                        ),
-                    );
+                    // One message per template, for its first bad name.
+                    if !bad_name {
+                        self.invalid(
+                            loc(&template),
+                            "name",
+                            format!(
+                                "the template {:?} gives {name:?}, which {m}; allowed: {}",
+                                template.value,
+                                names::ALLOWED
+                            ),
+                        );
+                    }
+                    bad_name = true;
                     continue;
                 }
                 if let Some(params) = self.params(&merged, &point, loc(s)) {
@@ -569,9 +588,9 @@ impl Ctx {
                     "profiles.radial",
                     format!(
                         "dr_min_mm = {}, growth = {}, r_max_mm = {} give more than {} radial bins",
-                        s.dr_min_mm,
-                        s.growth,
-                        s.r_max_mm,
+                        num(s.dr_min_mm),
+                        num(s.growth),
+                        num(s.r_max_mm),
                         count_text(cap)
                     ),
                     "radial_bins",
@@ -662,7 +681,10 @@ impl Ctx {
                 at,
                 "wavelengths.step_nm",
                 format!(
-                    "{start}–{stop} nm in steps of {step} nm gives {} wavelengths",
+                    "{}–{} nm in steps of {} nm gives {} wavelengths",
+                    num(start),
+                    num(stop),
+                    num(step),
                     if n < 1e15 {
                         count_text(n as u64)
                     } else {

@@ -139,7 +139,7 @@ pub(super) fn diagnose(
 
 /// serde-saphyr's message without its "error: line L column C:" prefix, source snippet and
 /// advice to programmers (we print file:line:column ourselves).
-fn clean(message: &str) -> String {
+pub(super) fn clean(message: &str) -> String {
     let mut m = message.lines().next().unwrap_or(message).trim();
     m = m.strip_prefix("error:").unwrap_or(m).trim();
     if let Some(rest) = m.strip_prefix("line ") {
@@ -147,10 +147,42 @@ fn clean(message: &str) -> String {
             m = after;
         }
     }
-    m.split(", set DuplicateKeyPolicy")
-        .next()
-        .unwrap_or(m)
-        .to_string()
+    humane(m.split(", set DuplicateKeyPolicy").next().unwrap_or(m))
+}
+
+/// serde-saphyr's messages that name its own options or types, in the words of a spec's
+/// author.
+pub(super) fn humane(m: &str) -> String {
+    if let Some(rest) = m.strip_prefix("non-finite float ") {
+        let v = rest.split(" rejected").next().unwrap_or(rest);
+        return format!("{v} is not a finite number");
+    }
+    if m.starts_with("multiple YAML documents detected") {
+        return "a spec is one YAML document; a second one starts here (`---`)".into();
+    }
+    if m.contains("recursive references require") {
+        return "an alias refers to the node that defines it (a recursive reference)".into();
+    }
+    if m.starts_with("recursion limit exceeded") {
+        return "nested too deeply (lists and maps inside each other, more than 64 levels)".into();
+    }
+    if let Some(rest) = m.strip_prefix("budget breached: ") {
+        let what = rest.split([' ', '{']).next().unwrap_or(rest);
+        let why = match what {
+            "Nodes" => {
+                "more than 250,000 values (aliases expanded): an alias bomb or a far too large spec"
+            }
+            "Aliases" | "AliasAnchorRatio" => "too many aliases (`*name`) for a spec",
+            "Anchors" => "too many anchors (`&name`) for a spec",
+            "Depth" => "nested too deeply (more than 64 levels)",
+            "Events" => "more than 1,000,000 YAML events: a far too large spec",
+            "Documents" => "too many YAML documents",
+            "ScalarBytes" | "TotalScalarBytes" => "more than 64 MiB of text values",
+            _ => "over the YAML reader's safety limits",
+        };
+        return format!("the spec is {why}");
+    }
+    m.to_string()
 }
 
 /// The YAML parser (not serde) rejected the text.
@@ -182,6 +214,7 @@ fn is_type_error(m: &str) -> bool {
         "expected sequence",
         "expected string scalar",
         "expected a ",
+        "is not a finite number",
     ]
     .iter()
     .any(|p| m.contains(p))

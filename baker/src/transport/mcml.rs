@@ -61,6 +61,10 @@ fn data_lines(text: &str) -> Vec<(usize, &str)> {
 }
 
 /// Parses every run of an `.mci` file (format version 1.0).
+/// Largest nz·nr (A(r, z)) and nr·na (Rd(r, α)) grid an .mci file may ask for: 2²⁴ cells
+/// (128 MiB of f64 each), far above MCML's examples (nz·nr = 40,000).
+pub const MAX_GRID_CELLS: usize = 1 << 24;
+
 pub fn parse_mci(text: &str) -> Result<Vec<McmlRun>, String> {
     let lines = data_lines(text);
     let mut it = lines.into_iter();
@@ -102,6 +106,17 @@ pub fn parse_mci(text: &str) -> Result<Vec<McmlRun>, String> {
             .next()
             .ok_or(format!("line {line}: missing output file name"))?
             .to_string();
+        // Written next to the .mci file: a plain name, never a path that leads elsewhere.
+        if output_file == "."
+            || output_file == ".."
+            || output_file.contains(['/', '\\', '\0'])
+            || output_file.chars().any(char::is_control)
+        {
+            return Err(format!(
+                "line {line}: output file {output_file:?} must be a plain file name (it is \
+                 written next to the .mci file)"
+            ));
+        }
         let l = next("number of photons")?;
         let photons = count(
             nums(l, 1, "the number of photons")?[0],
@@ -120,6 +135,15 @@ pub fn parse_mci(text: &str) -> Result<Vec<McmlRun>, String> {
             count(g[1], l.0, "nr")?,
             count(g[2], l.0, "na")?,
         );
+        // The A(r, z) and Rd(r, α) grids are allocated from these: bounded first.
+        if nz.saturating_mul(nr) > MAX_GRID_CELLS || nr.saturating_mul(na) > MAX_GRID_CELLS {
+            return Err(format!(
+                "line {}: nz × nr = {} or nr × na = {} is over {MAX_GRID_CELLS} grid cells",
+                l.0,
+                nz.saturating_mul(nr),
+                nr.saturating_mul(na)
+            ));
+        }
         let l = next("number of layers")?;
         let nl = count(
             nums(l, 1, "the number of layers")?[0],

@@ -113,7 +113,7 @@ impl Stack {
                 allowed: "> 0",
             });
         }
-        if self.grid.nr == 0 || self.grid.nr > 1_000_000 {
+        if self.grid.nr == 0 || self.grid.nr > 100_000 {
             return Err(StackError::Global {
                 field: "grid.nr",
                 value: self.grid.nr as f64,

@@ -106,11 +106,6 @@ impl Polygon {
             if signed_area(h) > 0.0 {
                 h.reverse();
             }
-            if !h.iter().all(|&v| in_loop(&outer, v)) {
-                return Err(SectionError::Degenerate(format!(
-                    "hole {k} is not inside the outer loop"
-                )));
-            }
         }
         let loops: Vec<&Vec<[f64; 2]>> = std::iter::once(&outer).chain(holes.iter()).collect();
         let mut segs = Vec::new();
@@ -124,6 +119,15 @@ impl Polygon {
                 "outline crosses itself near ({:.3}, {:.3}) µm",
                 segs[i].0[0], segs[i].0[1]
             )));
+        }
+        // No loop crosses another, so a hole is wholly inside the outer loop or wholly outside
+        // it: one vertex tells which.
+        for (k, h) in holes.iter().enumerate() {
+            if !in_loop(&outer, h[0]) {
+                return Err(SectionError::Degenerate(format!(
+                    "hole {k} is not inside the outer loop"
+                )));
+            }
         }
         Ok(Self::from_checked(outer, holes, &segs))
     }
