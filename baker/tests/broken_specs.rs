@@ -6,7 +6,8 @@
 //! The expected line, field and allowed values of each file are in
 //! `tests/specs/broken/expected.json`; the first line of each file says what is broken.
 //! Spec errors are found before any transport starts: `validate` runs first, and `bake` only
-//! when `validate` rejected the spec, so a case that stops failing cannot start a bake.
+//! when `validate` rejected the spec, so a case that stops failing cannot start a bake. Both
+//! share one validator: their messages must be identical (issue "hardening").
 
 mod common;
 
@@ -138,8 +139,16 @@ fn every_broken_spec_names_file_line_field_and_allowed_values_and_touches_nothin
         let stem = Path::new(&case.file).file_stem().unwrap().to_str().unwrap();
         let out = existing_out(tmp.path(), stem);
         let before = snapshot(tmp.path());
-        let o = baker(&["bake", &spec, "--out", out.to_str().unwrap()]);
-        failures.extend(problems("bake", &spec, case, &o));
+        let ob = baker(&["bake", &spec, "--out", out.to_str().unwrap()]);
+        failures.extend(problems("bake", &spec, case, &ob));
+        // One validator: bake rejects with validate's very words.
+        if stderr(&ob) != stderr(&o) {
+            failures.push(format!(
+                "{spec}: validate and bake disagree:\n--- validate\n{}--- bake\n{}",
+                stderr(&o),
+                stderr(&ob)
+            ));
+        }
         let after = snapshot(tmp.path());
         if after != before {
             let changed: Vec<_> = before

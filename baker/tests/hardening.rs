@@ -288,7 +288,7 @@ fn every_writing_command_leaves_devices_and_fifos_what_they_were() {
             }
             if let Err(m) = still_special(&dev, &fifo) {
                 problems.push(format!("{tag}: {m}"));
-                return assert!(false, "{}", problems.join("\n"));
+                panic!("{}", problems.join("\n"));
             }
         }
     }
@@ -307,6 +307,52 @@ fn every_writing_command_leaves_devices_and_fifos_what_they_were() {
     assert!(o.status.success(), "{}", err(&o));
     assert!(String::from_utf8_lossy(&o.stdout).contains("light30"));
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+#[test]
+fn export_refuses_damaged_or_non_finite_tables_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(d.join("skin.yaml"), SKIN).unwrap();
+    std::fs::write(d.join("fib.yaml"), FIBER).unwrap();
+    let o = baker(d, &["bake", "skin.yaml", "fib.yaml", "--out", "out", "-q"]);
+    assert!(o.status.success(), "{}", err(&o));
+    // NaN values with consistent checksums.
+    let mut t = formats::TableFile::read(d.join("out/skin/profiles.bkt")).unwrap();
+    let a = t
+        .arrays
+        .iter_mut()
+        .find(|a| a.name.ends_with("rd_rgb_per_mm2"))
+        .unwrap();
+    if let formats::table::Data::F64(v) = &mut a.data {
+        v[3] = f64::NAN;
+    }
+    t.write(d.join("nan.bkt"), 3).unwrap();
+    // One flipped byte in the last frame of each kind (an array or a direction the export
+    // itself may never decode).
+    for (src, dst) in [
+        ("out/skin/profiles.bkt", "flip.bkt"),
+        ("out/fib/round/section-00.bcsdf", "flip.bcsdf"),
+    ] {
+        let mut b = std::fs::read(d.join(src)).unwrap();
+        let n = b.len();
+        b[n - 3] ^= 0x10;
+        std::fs::write(d.join(dst), b).unwrap();
+    }
+    for (table, to) in [
+        ("nan.bkt", "burley"),
+        ("flip.bkt", "unreal"),
+        ("flip.bcsdf", "chiang"),
+    ] {
+        let o = baker(d, &["export", table, "--to", to, "-o", "x.out"]);
+        assert_eq!(o.status.code(), Some(1), "{table}: {}", err(&o));
+        assert!(
+            err(&o).contains(table) && err(&o).contains("damaged"),
+            "{}",
+            err(&o)
+        );
+        assert!(!d.join("x.out").exists(), "{table}: something was written");
+    }
 }
 
 #[test]

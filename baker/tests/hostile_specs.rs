@@ -13,8 +13,6 @@
 //! Auxiliary files too large to commit are generated here (`aux: gen:…`), FIFOs and folders
 //! made (`fifo:…`, `dir:…`).
 
-mod common;
-
 use std::collections::BTreeMap;
 use std::io::Write as _;
 use std::os::unix::process::CommandExt as _;
@@ -22,7 +20,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::repo;
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
 
 const DIR: &str = "tests/specs/hostile";
 const TIMEOUT: Duration = Duration::from_secs(60);

@@ -373,21 +373,18 @@ impl Destination {
     }
 }
 
-/// The layer optics of the entries of `spec` that `pick` selects (the resolver has evaluated
-/// them once already, so this cannot fail on a resolved spec).
+/// The layer optics of the entries of `spec` that `pick` selects (evaluated by the resolver).
 pub fn skin_optics(
     spec: &SkinSpec,
     pick: impl Fn(&crate::spec::ResolvedEntry) -> bool,
 ) -> anyhow::Result<Vec<formats::OpticsEntry>> {
-    spec.entries
+    Ok(spec
+        .entries
         .iter()
-        .filter(|e| pick(e))
-        .map(|e| {
-            let o = crate::skin::evaluate(&e.params, &spec.wavelengths)
-                .with_context(|| format!("{}:{}: entry {}", spec.file, e.line, e.name))?;
-            Ok(crate::skin::document::entry(&e.name, &e.params, &o))
-        })
-        .collect()
+        .zip(&spec.optics)
+        .filter(|(e, _)| pick(e))
+        .map(|(_, o)| o.clone())
+        .collect())
 }
 
 fn say(a: &BakeArgs, msg: impl AsRef<str>) {
@@ -637,19 +634,19 @@ fn bake_spec(
     // Manifest.
     let dir = out.expect("a shard has returned").staged.dir();
     let mut files = vec![
-        manifest::file_entry(&dir, "profiles.h5", "HDF5 tables (formats/FORMAT.md)")?,
+        manifest::file_entry(dir, "profiles.h5", "HDF5 tables (formats/FORMAT.md)")?,
         manifest::file_entry(
-            &dir,
+            dir,
             "profiles.bkt",
             "native zstd tables (formats/FORMAT.md)",
         )?,
-        manifest::file_entry(&dir, "profiles_rgb.exr", "RGB profiles, one row per entry")?,
-        manifest::file_entry(&dir, "optics.json", "layer optics of every entry")?,
+        manifest::file_entry(dir, "profiles_rgb.exr", "RGB profiles, one row per entry")?,
+        manifest::file_entry(dir, "optics.json", "layer optics of every entry")?,
     ];
     for s in &sheets {
         let rel = format!("preview/{}", s.file_name().unwrap().to_string_lossy());
         files.push(manifest::file_entry(
-            &dir,
+            dir,
             &rel,
             "contact sheet of skin swatches",
         )?);
@@ -658,9 +655,9 @@ fn bake_spec(
     for ((e, p), r) in entries.iter().zip(&spectral).zip(&rgb) {
         let csv = format!("optics/{}.csv", e.name);
         let plot = format!("preview/profiles/{}.png", e.name);
-        files.push(manifest::file_entry(&dir, &csv, "layer optics table")?);
+        files.push(manifest::file_entry(dir, &csv, "layer optics table")?);
         files.push(manifest::file_entry(
-            &dir,
+            dir,
             &plot,
             "RGB profile and fit plot",
         )?);

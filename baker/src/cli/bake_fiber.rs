@@ -127,7 +127,7 @@ pub fn bake_fiber_spec(
     let dir = d.staged.dir();
     let mut mfiles = Vec::new();
     for (rel, desc) in &files {
-        mfiles.push(manifest::file_entry(&dir, rel, desc)?);
+        mfiles.push(manifest::file_entry(dir, rel, desc)?);
     }
     let doc = serde_json::json!({
         "kind": "baker-fiber-bake",

@@ -179,12 +179,13 @@ pub fn merge(m: MergeArgs) -> anyhow::Result<()> {
     let mut count = None;
     for d in &m.shards {
         let p = d.join("shard.json");
-        let text = std::fs::read_to_string(&p).with_context(|| {
-            format!(
-                "{}: not a shard directory (no readable shard.json)",
-                d.display()
-            )
-        })?;
+        let text = crate::files::read_text(&p, crate::files::MAX_SPEC_BYTES, "a shard manifest")
+            .with_context(|| {
+                format!(
+                    "{}: not a shard directory (no readable shard.json)",
+                    d.display()
+                )
+            })?;
         let s: ShardManifest = serde_json::from_str(&text)
             .with_context(|| format!("{}: invalid shard manifest", p.display()))?;
         let (i, n): (usize, usize) = s

@@ -319,7 +319,7 @@ pub fn load_str(file: &str, text: &str, dir: &Path) -> Result<FiberSpec, SpecErr
 fn resolve_raw(file: &str, raw: RawFiberSpec, dir: &Path) -> Result<FiberSpec, SpecErrors> {
     let mut cx = Ctx {
         file: file.to_string(),
-        errors: Vec::new(),
+        ..Ctx::default()
     };
     let spec = cx.fiber_spec(raw, dir);
     if cx.errors.is_empty() {
@@ -366,13 +366,27 @@ impl Ctx {
                 dyes.push(dy);
             }
         }
-        if raw.fibers.len() as u64 > limits.entries {
+        // Each cross-section of each fiber is built, measured and checked for symmetry here:
+        // they count as entries (counted before any is built).
+        let sections: f64 = raw
+            .fibers
+            .iter()
+            .map(|f| {
+                f.value
+                    .sections
+                    .as_ref()
+                    .map_or(1.0, |s| s.value.clamp(1.0, 64.0))
+            })
+            .sum();
+        let within = sections <= limits.entries as f64;
+        if !within {
             self.over_limit(
                 (1, 1),
                 "fibers",
                 format!(
-                    "the spec lists {} fibers",
-                    count_text(raw.fibers.len() as u64)
+                    "the spec lists {} fibers with {} cross-sections",
+                    count_text(raw.fibers.len() as u64),
+                    count_text(sections as u64)
                 ),
                 "entries",
                 count_text(limits.entries),
@@ -383,7 +397,7 @@ impl Ctx {
             .as_ref()
             .map_or_else(BakeSettings::default, |b| self.bake(&b.value, &limits));
         let mut fibers: Vec<FiberEntry> = Vec::new();
-        for f in raw.fibers.iter().take(limits.entries as usize) {
+        for f in raw.fibers.iter().filter(|_| within) {
             if let Some(e) = self.fiber(f, &dyes, &broken, dir, &bake, &limits) {
                 if let Some(first) = fibers.iter().find(|x| x.name.eq_ignore_ascii_case(&e.name)) {
                     self.invalid(
@@ -456,7 +470,7 @@ impl Ctx {
                 "fibers",
                 format!(
                     "{}: {} stored directions × {tables} table(s) × {} variant(s) × {} channel(s) × {} bins \
-                     is {gib:.1} GiB of f32 tables",
+                     is {gib:.2} GiB of f32 tables",
                     e.name,
                     count_text(e.stored_directions as u64),
                     e.variants.len(),
@@ -1108,10 +1122,18 @@ impl Ctx {
                 dir,
                 "a CSV of x_um,y_um rows (a blank line or `hole` starts a hole)",
             )?;
-            return match Section::from_csv(&file, limits.polygon_vertices) {
+            let key = format!("polygon\0{}\0{}", file.display(), limits.polygon_vertices);
+            let read = self
+                .read_sections
+                .entry(key)
+                .or_insert_with(|| {
+                    Section::from_csv(&file, limits.polygon_vertices).map_err(|e| e.to_string())
+                })
+                .clone();
+            return match read {
                 Ok(sec) => Some((SectionSource::Polygon { file }, sec)),
                 Err(e) => {
-                    self.invalid(loc(p), "fibers.section.polygon", e.to_string());
+                    self.invalid(loc(p), "fibers.section.polygon", e);
                     None
                 }
             };
@@ -1139,10 +1161,27 @@ impl Ctx {
             dir,
             "a binary image (PNG) of the cross-section",
         )?;
-        match from_mask(&file, &o) {
-            Ok((sec, _)) => Some((SectionSource::Mask { file, um_per_px }, sec)),
+        let key = format!(
+            "mask\0{}\0{}\0{}\0{}\0{}",
+            file.display(),
+            um_per_px.to_bits(),
+            o.smoothing_passes,
+            o.max_pixels,
+            o.max_vertices
+        );
+        let read = self
+            .read_sections
+            .entry(key)
+            .or_insert_with(|| {
+                from_mask(&file, &o)
+                    .map(|(s, _)| s)
+                    .map_err(|e| e.to_string())
+            })
+            .clone();
+        match read {
+            Ok(sec) => Some((SectionSource::Mask { file, um_per_px }, sec)),
             Err(e) => {
-                self.invalid(loc(m), "fibers.section.mask", e.to_string());
+                self.invalid(loc(m), "fibers.section.mask", e);
                 None
             }
         }

@@ -14,14 +14,17 @@
 //! | limit | default | what it bounds | the shipped specs need |
 //! |---|---|---|---|
 //! | `wavelengths` | 471 | wavelengths of a skin spec or of a fiber bake's spectrum (1 nm steps over 360–830 nm) | 31 |
-//! | `radial_bins` | 4096 | radial bins of the skin profiles (`profiles.radial`) | 239 |
-//! | `entries` | 10,000 | entries of a spec, sweeps expanded | 126 |
-//! | `photons` | 1e11 | photon packets a bake traces (skin: groups × wavelengths × photons × boost; fiber: directions × sections × photons); about a day on 2 cores | 7.4e8 (`fitzpatrick.yaml`; `fibers-thesis.yaml` raises it to 1e13 for its 3.0e12) |
-//! | `variants` | 1024 | dyeings of one fiber entry (sweep dyes × depths of shade, + undyed) | 4 |
-//! | `table_gib` | 8 | one fiber entry's tables, uncompressed f32 (stored directions × channels × bins × tables) | 0.6 |
-//! | `mask_pixels` | 16,777,216 | pixels of a mask image (4096²), checked from its header before decoding | 40,000 |
-//! | `polygon_vertices` | 100,000 | vertices of a polygon section (CSV or mask outline) | 1,200 |
-//! | `memory_gib` | 16 | the bake's memory bound, as `baker plan` prints it | 0.4 |
+//! | `radial_bins` | 4096 | radial bins of the skin profiles (`profiles.radial`), counted before the grid is built | 129 |
+//! | `entries` | 10,000 | entries of a skin spec, sweeps expanded (counted before they are); cross-sections of a fiber spec (Σ `sections`) | 126 |
+//! | `photons` | 1e11 | photon packets a bake traces (skin: groups × wavelengths × photons × boost; fiber: directions × sections × photons): about a day on 2 cores | 7.4e8 (`fitzpatrick.yaml`; `fibers-thesis.yaml` raises it to 1e13 for its 3.0e12) |
+//! | `variants` | 1024 | dyeings of one fiber entry (sweep dyes × depths of shade, + undyed) | 7 |
+//! | `table_gib` | 8 | one fiber entry's tables, uncompressed f32 (stored directions × tables × channels × bins × 4 B) | 0.4 (silk; `fibers-thesis.yaml` raises it to 32 for cotton's 23.5) |
+//! | `mask_pixels` | 16,777,216 | pixels of a mask image (4096²), from its header before it is decoded | — |
+//! | `polygon_vertices` | 100,000 | vertices of a polygon section (CSV rows or mask outline) | — |
+//! | `memory_gib` | 16 | the bake's memory bound ([`super::budget`]), as `baker plan` prints it | 0.34 (`fibers-thesis.yaml` raises it to 32 for its 14.6) |
+//!
+//! The process's own address-space limit (`ulimit -v`) is a limit too: a bake whose memory
+//! bound does not fit in 75 % of it is refused before it starts.
 
 use super::raw::Spanned;
 use super::resolve::{loc, Ctx};

@@ -37,6 +37,8 @@ pub struct SkinSpec {
     pub largest_group: usize,
     /// SHA-256 of the spec text as read (provenance in every table).
     pub sha256: String,
+    /// The layer optics of every entry (in `entries` order), evaluated once by the resolver.
+    pub optics: Vec<formats::OpticsEntry>,
 }
 
 /// How the diffusion profiles of a spec are baked (`profiles:` block).
@@ -116,7 +118,7 @@ pub fn load_str(file: &str, text: &str) -> Result<SkinSpec, SpecErrors> {
 fn resolve_raw(file: &str, raw: RawSpec) -> Result<SkinSpec, SpecErrors> {
     let mut cx = Ctx {
         file: file.to_string(),
-        errors: Vec::new(),
+        ..Ctx::default()
     };
     let spec = cx.resolve(raw);
     cx.dedup();
@@ -191,9 +193,13 @@ pub(super) fn parse_plain<T: serde::de::DeserializeOwned>(
     })
 }
 
+#[derive(Default)]
 pub(super) struct Ctx {
     pub(super) file: String,
     pub(super) errors: Vec<SpecError>,
+    /// Sections read from files, by file and reading options: a file named by many fibers is
+    /// read and checked once.
+    pub(super) read_sections: HashMap<String, Result<crate::fiber::Section, String>>,
 }
 
 pub(super) fn loc<T>(s: &Spanned<T>) -> (u64, u64) {
@@ -436,6 +442,31 @@ impl Ctx {
         let profiles = self.profiles(&raw, &limits);
         // What the bake would reject after the spec: a layer that vanishes with age, a junction
         // deeper than its layers, a stack the transport refuses.
+        // Before any entry is evaluated: could this spec's profiles fit at all?
+        let floor = super::budget::skin_floor_bytes(
+            entries.len() as f64,
+            wavelengths.len() as f64,
+            crate::transport::RadialBins::fine_then_log_count(
+                profiles.dr_min_mm,
+                profiles.growth,
+                profiles.r_max_mm,
+                limits.radial_bins,
+            ) as f64,
+        );
+        if floor > limits.memory_gib * super::budget::BYTES_PER_GIB {
+            self.over_limit(
+                (1, 1),
+                "spec",
+                format!(
+                    "{} entries × {} wavelengths of profiles need {:.1} GiB of memory",
+                    count_text(entries.len() as u64),
+                    wavelengths.len(),
+                    floor / super::budget::BYTES_PER_GIB
+                ),
+                "memory_gib",
+                format!("{} GiB", limits.memory_gib),
+            );
+        }
         let mut docs = Vec::new();
         if self.errors.is_empty() {
             for e in &entries {
@@ -464,6 +495,7 @@ impl Ctx {
             groups,
             largest_group,
             sha256: String::new(),
+            optics: docs,
         }
     }
 
@@ -494,7 +526,6 @@ impl Ctx {
         let Some(p) = &raw.profiles else {
             return s;
         };
-        let p_at = &p.value;
         let p = &p.value;
         let count = |this: &mut Self, field: &str, v: &Option<Spanned<f64>>, lo: f64, hi: f64| {
             let v = v.as_ref()?;
@@ -530,6 +561,7 @@ impl Ctx {
             s.max_photon_boost = n;
         }
         if let Some(r) = &p.radial {
+            let radial_at = loc(r);
             let r = &r.value;
             s.dr_min_mm = self.opt_range(
                 "profiles.radial.dr_min_mm",
@@ -556,11 +588,7 @@ impl Ctx {
                 s.r_max_mm,
             );
             if s.r_max_mm <= s.dr_min_mm {
-                let at = r
-                    .r_max_mm
-                    .as_ref()
-                    .map(loc)
-                    .unwrap_or(loc(&p_at.radial.as_ref().unwrap()));
+                let at = r.r_max_mm.as_ref().map(loc).unwrap_or(radial_at);
                 self.invalid(
                     at,
                     "profiles.radial.r_max_mm",
@@ -582,7 +610,7 @@ impl Ctx {
                     .as_ref()
                     .or(r.growth.as_ref())
                     .or(r.r_max_mm.as_ref())
-                    .map_or_else(|| loc(p_at.radial.as_ref().unwrap()), loc);
+                    .map_or(radial_at, loc);
                 self.over_limit(
                     at,
                     "profiles.radial",

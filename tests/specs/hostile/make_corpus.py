@@ -175,6 +175,13 @@ case("spec_too_large", None, 2, ["over the limit", "spec file"], aux="gen:huge_s
      no_line=True)
 case("spec_many_nodes", None, 2, ["values"], aux="gen:many_nodes.yaml", spec="many_nodes.yaml")
 
+many = "".join(f"  - {{name: m{i}, type: polyester, section: {{mask: 001_disc_40px.png, um_per_px: 0.25}}}}\n" for i in range(3000))
+case("fiber_many_fibers_one_mask",
+     f"# hostile: 3000 fibers naming one mask (read once), the last one broken\n{FIB_FAST}fibers:\n{many}"
+     "  - {name: last, type: polyester, eta: 9}\n", 2, ["fibers.eta"])
+fiber("fiber_sections_total", [f"{{name: s{i}, type: silk, sections: 64}}" for i in range(200)], 2,
+      ["12,800 cross-sections", "limits.entries"])
+
 # --- validate and bake must agree: checks that used to run only in bake -------------------------
 skin("skin_junction_too_deep", [E.replace("}", ", dej_amplitude_um: 200}")], 2, ["junction"])
 skin("skin_layer_vanishes", [E.replace("age: 30", "age: 90").replace("}", ", atrophy_per_decade: {living_epidermis: 0.5}}")],

@@ -300,7 +300,7 @@ impl Polygon {
     /// The same outline scaled by `k > 0` about the origin and shifted by `-shift` first. A
     /// similarity keeps a simple outline simple, so the loops are not checked again.
     pub fn transformed(&self, shift: [f64; 2], k: f64) -> Result<Self, SectionError> {
-        if !(k.is_finite() && k > 0.0) || !shift.iter().all(|x| x.is_finite()) {
+        if !(k.is_finite() && k > 0.0 && shift.iter().all(|x| x.is_finite())) {
             return Err(SectionError::Degenerate(format!(
                 "cannot scale by {k} or shift by ({}, {})",
                 shift[0], shift[1]
