@@ -10,24 +10,15 @@
 //!   each spec at few photons; `cargo test --release -p baker --test hardening -- --ignored`
 //!   runs the whole default specs at their own photon counts.)
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::os::unix::fs::FileTypeExt as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn baker(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_baker"))
-        .args(args)
-        .current_dir(dir)
-        .stdin(Stdio::null())
-        .output()
-        .expect("baker runs")
-}
+use common::{baker_in as baker, events, repo, tree};
 
 fn err(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).to_string()
@@ -47,40 +38,6 @@ bake: {resolution_deg: 30, photons_per_direction: 512, seed: 5}
 fibers:
   - {name: round, type: polyester, section: {shape: circle}}
 ";
-
-/// Every regular file under `dir` with its bytes (the cache, timing and staging left out).
-fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        let Ok(rd) = std::fs::read_dir(&d) else {
-            continue;
-        };
-        for e in rd.flatten() {
-            let p = e.path();
-            let name = e.file_name().to_string_lossy().to_string();
-            if name == ".cache" || name == "timing.json" || name.contains(".partial-") {
-                continue;
-            }
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.insert(
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                );
-            }
-        }
-    }
-    out
-}
-
-fn events(stderr: &[u8]) -> Vec<serde_json::Value> {
-    String::from_utf8_lossy(stderr)
-        .lines()
-        .filter_map(|l| serde_json::from_str(l).ok())
-        .collect()
-}
 
 fn summary(o: &Output) -> serde_json::Value {
     events(&o.stderr)
@@ -467,6 +424,20 @@ fn cache_roots_survive_up_to_date_and_failed_bakes() {
     assert!(!stale.exists());
 }
 
+/// Three seeded random moments in (5 %, 95 %) of a bake's duration, as fractions (SplitMix64).
+fn moments(seed: u64) -> Vec<f64> {
+    let mut z = seed;
+    (0..3)
+        .map(|_| {
+            z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut x = z;
+            x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            0.05 + 0.9 * (((x ^ (x >> 31)) >> 11) as f64 / (1u64 << 53) as f64)
+        })
+        .collect()
+}
+
 /// Runs a bake, sends SIGTERM after `delay`, and returns (exit code, seconds from the signal
 /// to the exit), or `None` for the code when the bake finished before the signal.
 fn bake_and_terminate(d: &Path, args: &[&str], delay: Duration) -> (Option<i32>, f64) {
@@ -510,20 +481,11 @@ fn sigterm_resumes_identically(args: &[&str], seed: u64) {
     assert!(r.status.success(), "{}", err(&r));
     let total = t0.elapsed();
     let reference = tree(&d.join("ref"));
-    // SplitMix64: three moments in (5 %, 95 %) of the uninterrupted bake's duration.
-    let mut z = seed;
-    let mut uniform = || {
-        z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut x = z;
-        x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((x ^ (x >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
-    for k in 0..3 {
+    for (k, m) in moments(seed).into_iter().enumerate() {
         // Each from scratch, so that every signal meets a bake in progress.
         let out = format!("out{k}");
         let full: Vec<&str> = [args, &["--out", out.as_str(), "-q"]].concat();
-        let mut delay = total.mul_f64(0.05 + 0.9 * uniform());
+        let mut delay = total.mul_f64(m);
         let (code, after) = loop {
             let (code, after) = bake_and_terminate(d, &full, delay);
             // Faster than the reference (a less loaded machine): again, earlier.
@@ -597,11 +559,47 @@ fn sigterm_stops_default_fiber_bake_within_5s_and_resume_is_identical() {
     );
 }
 
+/// The whole default specs at their own photon counts: one bake signalled at three sorted
+/// random moments of an uninterrupted bake's duration, each resume continuing from the units
+/// the previous run finished (a chain, so the test costs two bakes, not four), then finished
+/// and compared with the uninterrupted bake byte for byte.
 #[test]
-#[ignore = "the whole default specs at their own photon counts: about 1 h 40 min on 2 cores"]
+#[ignore = "the whole default specs at their own photon counts: about an hour on 2 cores"]
 fn sigterm_on_the_whole_default_specs() {
-    for (spec, seed) in [("specs/fibers.yaml", 3), ("specs/fitzpatrick.yaml", 4)] {
+    for (spec, seed) in [("specs/fibers.yaml", 3u64), ("specs/fitzpatrick.yaml", 4)] {
         let p = repo().join(spec);
-        sigterm_resumes_identically(&["bake", p.to_str().unwrap()], seed);
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        let args = ["bake", p.to_str().unwrap()];
+        let t0 = Instant::now();
+        let r = baker(d, &[&args[..], &["--out", "ref", "-q"]].concat());
+        assert!(r.status.success(), "{}", err(&r));
+        let total = t0.elapsed();
+        let reference = tree(&d.join("ref"));
+        let mut moments = moments(seed);
+        moments.sort_by(f64::total_cmp);
+        let full: Vec<&str> = [&args[..], &["--out", "out", "-q"]].concat();
+        let mut last = 0.0;
+        for (k, m) in moments.iter().enumerate() {
+            let delay = total.mul_f64(m - last);
+            last = *m;
+            let (code, after) = bake_and_terminate(d, &full, delay);
+            eprintln!(
+                "{spec}: SIGTERM {k} at {:.0} s of {:.0} s: exit {code:?} {after:.3} s after the signal",
+                total.as_secs_f64() * m,
+                total.as_secs_f64()
+            );
+            if k == 0 {
+                assert_eq!(code, Some(130));
+            }
+            if let Some(c) = code {
+                assert_eq!(c, 130);
+                assert!(after < 5.0, "{spec}: exit {after:.2} s after SIGTERM");
+            }
+        }
+        let o = baker(d, &full);
+        assert!(o.status.success(), "{}", err(&o));
+        let resumed = tree(&d.join("out"));
+        assert!(resumed == reference, "{spec}: the resumed bake differs");
     }
 }

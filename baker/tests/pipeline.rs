@@ -6,18 +6,14 @@
 //!   it is complete, and the resumed bake's tables equal an uninterrupted bake byte for byte;
 //! - `--shard I/N` + `baker merge` equals one bake byte for byte, N ∈ {1, 3, 4}, skin and fiber.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn baker(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_baker"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("baker runs")
-}
+use common::{baker_in as baker, events, tree};
 
 const SKIN: &str = "version: 1
 wavelengths: {start_nm: 450, stop_nm: 650, step_nm: 100}
@@ -35,44 +31,6 @@ fibers:
   - {name: trilobal, type: polyester, section: {shape: trilobal}}
   - {name: silk, type: silk, section: {shape: silk}, seed: 2, sections: 2}
 ";
-
-/// Every file under `dir` (relative path → bytes), skipping the cache and timing.json.
-fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        // A bake killed early may not have created the directory yet.
-        let Ok(rd) = std::fs::read_dir(&d) else {
-            continue;
-        };
-        for e in rd.flatten() {
-            let p = e.path();
-            let name = e.file_name().to_string_lossy().to_string();
-            // The cache, wall-clock times, and the private staging folder of a bake that was
-            // killed (`.<spec>.partial-<pid>`: never a final name; the next bake removes it).
-            if name == ".cache" || name == "timing.json" || name.contains(".partial-") {
-                continue;
-            }
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.insert(
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                );
-            }
-        }
-    }
-    out
-}
-
-/// JSON events of a `--progress json` run.
-fn events(stderr: &[u8]) -> Vec<serde_json::Value> {
-    String::from_utf8_lossy(stderr)
-        .lines()
-        .filter_map(|l| serde_json::from_str(l).ok())
-        .collect()
-}
 
 fn units_with(ev: &[serde_json::Value], kind: &str) -> Vec<String> {
     ev.iter()

@@ -175,13 +175,33 @@ pub fn run(a: BakeArgs) -> anyhow::Result<()> {
             } else {
                 Some(destination(&a, &root, path, &stem, spec)?)
             };
-            let baked = match spec {
-                Spec::Skin(s) => pool.install(|| bake_spec(&a, path, s, &runner, dest.as_ref()))?,
+            // Unchanged spec, flags and executable, outputs intact: nothing to do.
+            let stamp = super::pipeline::stamp(&a, path, spec_sha(spec));
+            if let Some(d) = &dest {
+                if !a.force && super::pipeline::up_to_date(d.staged.target(), &stamp) {
+                    runner
+                        .events
+                        .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
+                    say(
+                        &a,
+                        format!(
+                            "{}: up to date ({})",
+                            path.display(),
+                            Shown(d.staged.target())
+                        ),
+                    );
+                    continue;
+                }
+            }
+            match spec {
+                Spec::Skin(s) => {
+                    pool.install(|| bake_spec(&a, path, s, &runner, dest.as_ref(), &stamp))?
+                }
                 Spec::Fiber(s) => pool.install(|| {
-                    super::bake_fiber::bake_fiber_spec(&a, path, s, &runner, dest.as_ref())
+                    super::bake_fiber::bake_fiber_spec(&a, path, s, &runner, dest.as_ref(), &stamp)
                 })?,
-            };
-            if let (Some(d), true) = (dest, baked) {
+            }
+            if let Some(d) = dest {
                 let keys: Vec<Key> = runner.used.lock().unwrap()[first_unit..]
                     .iter()
                     .map(|(_, k)| *k)
@@ -393,35 +413,17 @@ fn say(a: &BakeArgs, msg: impl AsRef<str>) {
     }
 }
 
-/// Bakes a skin spec into `out` (`None` for a shard: units only). `Ok(false)` when the
-/// finished folder is up to date and nothing was written.
+/// Bakes a skin spec into `out` (`None` for a shard: units only), recording `stamp`.
 fn bake_spec(
     a: &BakeArgs,
     path: &Path,
     spec: &SkinSpec,
     runner: &Runner,
     out: Option<&Destination>,
-) -> anyhow::Result<bool> {
+    stamp: &str,
+) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let stem = spec_stem(path)?;
-    // Unchanged spec, flags and executable, outputs intact: nothing to do.
-    let stamp = super::pipeline::stamp(a, path, &spec.sha256);
-    if let Some(d) = out {
-        if !a.force && super::pipeline::up_to_date(d.staged.target(), &stamp) {
-            runner
-                .events
-                .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
-            say(
-                a,
-                format!(
-                    "{}: up to date ({})",
-                    path.display(),
-                    Shown(d.staged.target())
-                ),
-            );
-            return Ok(false);
-        }
-    }
     // Paths inside the folder being written, and the finished folder's name for messages.
     let at = |rel: &str| -> anyhow::Result<PathBuf> {
         Ok(out.expect("a shard writes no files").staged.path(rel)?)
@@ -465,8 +467,8 @@ fn bake_spec(
                 t0.elapsed().as_secs_f64()
             ),
         );
-        write_skin_manifest_optics_only(spec, &entries, out, &stamp)?;
-        return Ok(true);
+        write_skin_manifest_optics_only(spec, &entries, out, stamp)?;
+        return Ok(());
     }
 
     // Diffusion profiles.
@@ -523,7 +525,7 @@ fn bake_spec(
     }
     let Some(spectral) = spectral.filter(|_| !sharded) else {
         // A shard: its units are cached; `baker merge` assembles.
-        return Ok(true);
+        return Ok(());
     };
     let sim_seconds = t_sim.elapsed().as_secs_f64();
     let colour = ColourMap::new(lam);
@@ -703,7 +705,7 @@ fn bake_spec(
         &at("manifest.json")?,
         serde_json::to_string_pretty(&m)?.as_bytes(),
     )?;
-    super::pipeline::write_stamp(dir, &stamp)?;
+    super::pipeline::write_stamp(dir, stamp)?;
     if a.human() {
         summary(
             path,
@@ -717,7 +719,7 @@ fn bake_spec(
             t0,
         );
     }
-    Ok(true)
+    Ok(())
 }
 
 /// The keys of the units this process used since `first`, sorted, each once (units run in

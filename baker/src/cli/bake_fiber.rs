@@ -63,33 +63,18 @@ pub struct EntryReport {
     pub hdf5_bytes: u64,
 }
 
-/// Bakes every selected entry of a fiber spec into `out` (`None` for a shard: units only).
-/// `Ok(false)` when the finished folder is up to date and nothing was written.
+/// Bakes every selected entry of a fiber spec into `out` (`None` for a shard: units only),
+/// recording `stamp`.
 pub fn bake_fiber_spec(
     a: &BakeArgs,
     path: &Path,
     spec: &FiberSpec,
     runner: &Runner,
     out: Option<&Destination>,
-) -> anyhow::Result<bool> {
+    stamp: &str,
+) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let stem = super::bake::spec_stem(path)?;
-    let stamp = super::pipeline::stamp(a, path, &spec.sha256);
-    if let Some(d) = out {
-        if !a.force && super::pipeline::up_to_date(d.staged.target(), &stamp) {
-            runner
-                .events
-                .emit(serde_json::json!({"event": "up_to_date", "spec": path}));
-            if a.human() {
-                eprintln!(
-                    "{}: up to date ({})",
-                    path.display(),
-                    Shown(d.staged.target())
-                );
-            }
-            return Ok(false);
-        }
-    }
     let first_unit = runner.used.lock().unwrap().len();
     runner
         .events
@@ -122,7 +107,7 @@ pub fn bake_fiber_spec(
         }
     }
     let Some(d) = out else {
-        return Ok(true);
+        return Ok(());
     };
     let dir = d.staged.dir();
     let mut mfiles = Vec::new();
@@ -149,7 +134,7 @@ pub fn bake_fiber_spec(
         "note": "this run's wall-clock time; units taken from the cache cost nothing"});
     atomic::write(&p, serde_json::to_string_pretty(&doc)?.as_bytes())
         .with_context(|| format!("writing {}", p.display()))?;
-    super::pipeline::write_stamp(dir, &stamp)?;
+    super::pipeline::write_stamp(dir, stamp)?;
     if a.human() {
         eprintln!(
             "baked {}: {} fibers → {} ({:.1} s)",
@@ -159,7 +144,7 @@ pub fn bake_fiber_spec(
             t0.elapsed().as_secs_f64()
         );
     }
-    Ok(true)
+    Ok(())
 }
 
 /// The variants of an entry as μa spectra.

@@ -16,6 +16,7 @@
 
 use formats::bcsdf::{FLIP_DPHI, FLIP_THETA};
 
+use super::section::grid::{Segment, SegmentGrid};
 use super::{Fiber, Section};
 
 /// Rotational symmetry of the cross-section.
@@ -218,93 +219,35 @@ fn distance2_to_segment(a: [f64; 2], b: [f64; 2], q: [f64; 2]) -> f64 {
     ex * ex + ey * ey
 }
 
-/// The edges of closed loops bucketed in a uniform grid (about one edge per cell), so "is `q`
-/// within `tol` of the outline" looks at the few edges near `q`: a symmetry test of an outline
-/// of V vertices costs O(V), not O(V²).
+/// The edges of closed loops in a [`SegmentGrid`] (about one edge per cell), so "is `q` within
+/// `tol` of the outline" looks at the few edges near `q`: a symmetry test of an outline of V
+/// vertices costs O(V), not O(V²).
 struct EdgeGrid {
-    edges: Vec<([f64; 2], [f64; 2])>,
-    min: [f64; 2],
-    cell: f64,
-    n: [usize; 2],
-    start: Vec<u32>,
-    items: Vec<u32>,
+    edges: Vec<Segment>,
+    grid: SegmentGrid,
 }
 
 impl EdgeGrid {
     fn new(loops: &[Vec<[f64; 2]>]) -> EdgeGrid {
-        let edges: Vec<([f64; 2], [f64; 2])> = loops
+        let edges: Vec<Segment> = loops
             .iter()
             .flat_map(|l| (0..l.len()).map(move |i| (l[i], l[(i + 1) % l.len()])))
             .collect();
-        let mut min = [f64::INFINITY; 2];
-        let mut max = [f64::NEG_INFINITY; 2];
-        for (a, _) in &edges {
-            for k in 0..2 {
-                min[k] = min[k].min(a[k]);
-                max[k] = max[k].max(a[k]);
-            }
-        }
-        let size = (max[0] - min[0]).max(max[1] - min[1]).max(1e-12);
-        let side = (edges.len() as f64).sqrt().clamp(1.0, 2048.0);
-        let cell = size / side;
-        let n = [
-            (((max[0] - min[0]) / cell).floor() as usize + 1).min(4096),
-            (((max[1] - min[1]) / cell).floor() as usize + 1).min(4096),
-        ];
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n[0] * n[1]];
-        let g = EdgeGrid {
-            edges: Vec::new(),
-            min,
-            cell,
-            n,
-            start: Vec::new(),
-            items: Vec::new(),
-        };
-        for (i, (a, b)) in edges.iter().enumerate() {
-            let (x0, y0) = g.cell_of([a[0].min(b[0]), a[1].min(b[1])]);
-            let (x1, y1) = g.cell_of([a[0].max(b[0]), a[1].max(b[1])]);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    lists[y * n[0] + x].push(i as u32);
-                }
-            }
-        }
-        let mut start = Vec::with_capacity(lists.len() + 1);
-        let mut items = Vec::new();
-        start.push(0);
-        for l in &lists {
-            items.extend_from_slice(l);
-            start.push(items.len() as u32);
-        }
-        EdgeGrid {
-            edges,
-            start,
-            items,
-            ..g
-        }
-    }
-
-    fn cell_of(&self, p: [f64; 2]) -> (usize, usize) {
-        let c = |k: usize| {
-            (((p[k] - self.min[k]) / self.cell).floor().max(0.0) as usize).min(self.n[k] - 1)
-        };
-        (c(0), c(1))
+        let grid = SegmentGrid::new(&edges, (edges.len() as f64).sqrt().clamp(1.0, 2048.0));
+        EdgeGrid { edges, grid }
     }
 
     /// Whether `q` is within `tol` of an edge.
     fn within(&self, q: [f64; 2], tol: f64) -> bool {
-        let (x0, y0) = self.cell_of([q[0] - tol, q[1] - tol]);
-        let (x1, y1) = self.cell_of([q[0] + tol, q[1] + tol]);
+        let lo = self.grid.cell_of([q[0] - tol, q[1] - tol]);
+        let hi = self.grid.cell_of([q[0] + tol, q[1] + tol]);
         let tol2 = tol * tol;
-        (y0..=y1).any(|y| {
-            (x0..=x1).any(|x| {
-                let c = y * self.n[0] + x;
-                self.items[self.start[c] as usize..self.start[c + 1] as usize]
-                    .iter()
-                    .any(|&e| {
-                        let (a, b) = self.edges[e as usize];
-                        distance2_to_segment(a, b, q) <= tol2
-                    })
+        (lo[1]..=hi[1]).any(|y| {
+            (lo[0]..=hi[0]).any(|x| {
+                self.grid.cell(x, y).iter().any(|&e| {
+                    let (a, b) = self.edges[e as usize];
+                    distance2_to_segment(a, b, q) <= tol2
+                })
             })
         })
     }

@@ -62,7 +62,8 @@ pub struct Cost {
 /// The program itself (code, HDF5, thread stacks, allocator): what a tiny bake's peak resident
 /// set measures (79 MB for `tests/specs/profiles_small.yaml`), with room.
 const BASE_BYTES: f64 = 96.0 * 1024.0 * 1024.0;
-const GIB: f64 = (1u64 << 30) as f64;
+/// Bytes in a GiB.
+pub const GIB: f64 = (1u64 << 30) as f64;
 
 /// The cost of baking `spec` with `o`; an error if it is over the spec's limits.
 pub fn check(spec: &Spec, o: &Overrides) -> Result<Cost, SpecErrors> {
@@ -203,9 +204,6 @@ fn skin_cost(s: &SkinSpec, o: &Overrides) -> Cost {
 pub fn skin_floor_bytes(entries: f64, wavelengths: f64, radial_bins: f64) -> f64 {
     BASE_BYTES + 3.0 * entries * wavelengths * (2.0 * radial_bins + 12.0) * 8.0
 }
-
-/// [`GIB`] for the resolver's messages.
-pub const BYTES_PER_GIB: f64 = GIB;
 
 fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
     let st = &s.bake;

@@ -290,20 +290,9 @@ pub enum SymmetryMode {
 
 /// Reads and validates the fiber spec at `path` (a skin spec is an error that says so).
 pub fn load(path: &Path) -> Result<FiberSpec, SpecErrors> {
-    let file = path.display().to_string();
-    match super::load_any_str(
-        &file,
-        &super::read(path)?,
-        path.parent().unwrap_or(Path::new(".")),
-    )? {
+    match super::load_as(path, super::SpecKind::Fiber)? {
         super::Spec::Fiber(s) => Ok(s),
-        super::Spec::Skin(_) => Err(SpecErrors(vec![SpecError::Invalid {
-            file,
-            line: 1,
-            column: 1,
-            field: "spec".into(),
-            message: "is a skin spec (it has no `fibers:`); this command takes a fiber spec".into(),
-        }])),
+        super::Spec::Skin(_) => unreachable!("load_as checked the kind"),
     }
 }
 

@@ -80,6 +80,25 @@ pub fn load_any(path: &Path) -> Result<Spec, SpecErrors> {
     load_any_str(&file, &text, path.parent().unwrap_or(Path::new(".")))
 }
 
+/// Reads and resolves `path`, which must be a spec of kind `want` (the command's kind).
+pub fn load_as(path: &Path, want: SpecKind) -> Result<Spec, SpecErrors> {
+    let spec = load_any(path)?;
+    if spec.kind() == want {
+        return Ok(spec);
+    }
+    Err(SpecErrors(vec![SpecError::Invalid {
+        file: path.display().to_string(),
+        line: 1,
+        column: 1,
+        field: "spec".into(),
+        message: format!(
+            "is a {} spec; this command takes a {} spec",
+            spec.kind().name(),
+            want.name()
+        ),
+    }]))
+}
+
 /// [`load_any`] of spec text; files the spec names are relative to `dir`.
 pub fn load_any_str(file: &str, text: &str, dir: &Path) -> Result<Spec, SpecErrors> {
     match kind::detect(file, text).map_err(|e| SpecErrors(vec![e]))? {

@@ -89,20 +89,9 @@ pub struct ResolvedEntry {
 
 /// Reads and validates the skin spec at `path` (a fiber spec is an error that says so).
 pub fn load(path: &Path) -> Result<SkinSpec, SpecErrors> {
-    let file = path.display().to_string();
-    match super::load_any_str(
-        &file,
-        &super::read(path)?,
-        path.parent().unwrap_or(Path::new(".")),
-    )? {
+    match super::load_as(path, super::SpecKind::Skin)? {
         super::Spec::Skin(s) => Ok(s),
-        super::Spec::Fiber(_) => Err(SpecErrors(vec![SpecError::Invalid {
-            file,
-            line: 1,
-            column: 1,
-            field: "spec".into(),
-            message: "is a fiber spec (it has `fibers:`); this command takes a skin spec".into(),
-        }])),
+        super::Spec::Fiber(_) => unreachable!("load_as checked the kind"),
     }
 }
 
@@ -453,7 +442,7 @@ impl Ctx {
                 limits.radial_bins,
             ) as f64,
         );
-        if floor > limits.memory_gib * super::budget::BYTES_PER_GIB {
+        if floor > limits.memory_gib * super::budget::GIB {
             self.over_limit(
                 (1, 1),
                 "spec",
@@ -461,7 +450,7 @@ impl Ctx {
                     "{} entries × {} wavelengths of profiles need {:.1} GiB of memory",
                     count_text(entries.len() as u64),
                     wavelengths.len(),
-                    floor / super::budget::BYTES_PER_GIB
+                    floor / super::budget::GIB
                 ),
                 "memory_gib",
                 format!("{} GiB", limits.memory_gib),

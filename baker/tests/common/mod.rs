@@ -1,7 +1,10 @@
-//! Helpers shared by the integration tests that run the `baker` binary.
+//! Helpers shared by the integration tests that run the `baker` binary (each test file uses
+//! some of them).
+#![allow(dead_code)]
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
 
 /// The repository root: specs and fixtures are named relative to it.
 pub fn repo() -> PathBuf {
@@ -19,4 +22,52 @@ pub fn baker(args: &[&str]) -> Output {
 
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// Runs the `baker` binary in `dir`.
+pub fn baker_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_baker"))
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .output()
+        .expect("baker runs")
+}
+
+/// Every file under `dir` (relative path → bytes), leaving out the cache, wall-clock
+/// `timing.json` and the private staging folder of a bake that was killed
+/// (`.<spec>.partial-<pid>`: never a final name; the next bake removes it).
+pub fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        // A bake killed early may not have created the directory yet.
+        let Ok(rd) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in rd.flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().to_string();
+            if name == ".cache" || name == "timing.json" || name.contains(".partial-") {
+                continue;
+            }
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.insert(
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                );
+            }
+        }
+    }
+    out
+}
+
+/// JSON events of a `--progress json` run.
+pub fn events(stderr: &[u8]) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(stderr)
+        .lines()
+        .filter_map(|l| serde_json::from_str(l).ok())
+        .collect()
 }

@@ -3,6 +3,7 @@
 //! polygon with holes (parametric generators, CSV outlines, segmented SEM masks).
 
 pub mod generate;
+pub mod grid;
 pub mod mask;
 pub mod polygon;
 

@@ -1,6 +1,7 @@
 //! Polygonal cross-sections with holes, and the uniform-grid acceleration structure that makes
 //! ray queries against many-edged outlines cheap (§5.3: sections modelled from SEM images).
 
+use super::grid::{Segment, SegmentGrid};
 use super::SectionError;
 
 /// One edge of a loop: from `a` to `b`, with the unit normal `n` pointing out of the material
@@ -29,18 +30,7 @@ pub struct Polygon {
     outer: Vec<[f64; 2]>,
     holes: Vec<Vec<[f64; 2]>>,
     edges: Vec<Edge>,
-    grid: Grid,
-}
-
-/// Uniform grid over the bounding box; each cell lists the edges whose bounding box touches it.
-#[derive(Debug, Clone)]
-struct Grid {
-    min: [f64; 2],
-    max: [f64; 2],
-    cell: [f64; 2],
-    n: [usize; 2],
-    start: Vec<u32>,
-    items: Vec<u32>,
+    grid: SegmentGrid,
 }
 
 /// Signed area (positive for counter-clockwise loops), shoelace formula.
@@ -133,11 +123,7 @@ impl Polygon {
     }
 
     /// A polygon from loops already checked by [`Polygon::new`] (oriented, simple).
-    fn from_checked(
-        outer: Vec<[f64; 2]>,
-        holes: Vec<Vec<[f64; 2]>>,
-        segs: &[([f64; 2], [f64; 2])],
-    ) -> Self {
+    fn from_checked(outer: Vec<[f64; 2]>, holes: Vec<Vec<[f64; 2]>>, segs: &[Segment]) -> Self {
         let edges: Vec<Edge> = segs
             .iter()
             .map(|&(a, b)| {
@@ -156,7 +142,12 @@ impl Polygon {
                 }
             })
             .collect();
-        let grid = Grid::build(&edges);
+        // About two edges per occupied cell: √E cells on the longer side of the box.
+        let ends: Vec<Segment> = edges
+            .iter()
+            .map(|e| (e.a, [e.a[0] + e.ab[0], e.a[1] + e.ab[1]]))
+            .collect();
+        let grid = SegmentGrid::new(&ends, (edges.len() as f64).sqrt().clamp(1.0, 256.0));
         Self {
             outer,
             holes,
@@ -238,8 +229,7 @@ impl Polygon {
         }
         let mut best: Option<EdgeHit> = None;
         loop {
-            let ci = cell[1] * g.n[0] + cell[0];
-            for &e in &g.items[g.start[ci] as usize..g.start[ci + 1] as usize] {
+            for &e in g.cell(cell[0], cell[1]) {
                 if Some(e) == skip {
                     continue;
                 }
@@ -347,45 +337,19 @@ const MAX_PAIR_TESTS: u64 = 400_000_000;
 /// The first segment (index) that properly crosses another, for any number of segments: pairs
 /// are tested only where their bounding boxes share a cell of a uniform grid of about 4
 /// segments per occupied cell, so a real outline costs O(n).
-fn first_crossing(segs: &[([f64; 2], [f64; 2])]) -> Result<Option<usize>, SectionError> {
-    let mut min = [f64::INFINITY; 2];
-    let mut max = [f64::NEG_INFINITY; 2];
-    for (a, b) in segs {
-        for p in [a, b] {
-            for k in 0..2 {
-                if !p[k].is_finite() {
-                    return Err(SectionError::Degenerate(
-                        "an outline coordinate is not a finite number".into(),
-                    ));
-                }
-                min[k] = min[k].min(p[k]);
-                max[k] = max[k].max(p[k]);
-            }
-        }
+fn first_crossing(segs: &[Segment]) -> Result<Option<usize>, SectionError> {
+    if segs
+        .iter()
+        .any(|(a, b)| !a.iter().chain(b).all(|x| x.is_finite()))
+    {
+        return Err(SectionError::Degenerate(
+            "an outline coordinate is not a finite number".into(),
+        ));
     }
-    let size = [(max[0] - min[0]).max(1e-300), (max[1] - min[1]).max(1e-300)];
-    let side = (0.5 * (segs.len() as f64).sqrt()).clamp(1.0, 2048.0);
-    let longer = size[0].max(size[1]);
-    let n = [
-        ((side * size[0] / longer).ceil() as usize).max(1),
-        ((side * size[1] / longer).ceil() as usize).max(1),
-    ];
-    let cell_of = |x: f64, k: usize| -> usize {
-        ((((x - min[k]) / size[k]) * n[k] as f64).floor().max(0.0) as usize).min(n[k] - 1)
-    };
-    let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n[0] * n[1]];
-    for (i, (a, b)) in segs.iter().enumerate() {
-        let (x0, x1) = (cell_of(a[0].min(b[0]), 0), cell_of(a[0].max(b[0]), 0));
-        let (y0, y1) = (cell_of(a[1].min(b[1]), 1), cell_of(a[1].max(b[1]), 1));
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                lists[y * n[0] + x].push(i as u32);
-            }
-        }
-    }
+    let grid = SegmentGrid::new(segs, (0.5 * (segs.len() as f64).sqrt()).clamp(1.0, 2048.0));
     let mut tests = 0u64;
     let mut first: Option<usize> = None;
-    for l in &lists {
+    for l in grid.cells() {
         tests += (l.len() as u64) * (l.len() as u64).saturating_sub(1) / 2;
         if tests > MAX_PAIR_TESTS {
             return Err(SectionError::Degenerate(format!(
@@ -419,66 +383,6 @@ fn clean(mut l: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
         }
     }
     l
-}
-
-impl Grid {
-    /// About two edges per occupied cell: √E cells on the longer side of the box.
-    fn build(edges: &[Edge]) -> Self {
-        let mut min = [f64::INFINITY; 2];
-        let mut max = [f64::NEG_INFINITY; 2];
-        for e in edges {
-            for p in [e.a, [e.a[0] + e.ab[0], e.a[1] + e.ab[1]]] {
-                for k in 0..2 {
-                    min[k] = min[k].min(p[k]);
-                    max[k] = max[k].max(p[k]);
-                }
-            }
-        }
-        // Pad so points on the box edge fall inside.
-        let pad = 1e-6 * (max[0] - min[0]).max(max[1] - min[1]);
-        for k in 0..2 {
-            min[k] -= pad;
-            max[k] += pad;
-        }
-        let size = [max[0] - min[0], max[1] - min[1]];
-        let side = (edges.len() as f64).sqrt().clamp(1.0, 256.0);
-        let longer = size[0].max(size[1]);
-        let n = [
-            ((side * size[0] / longer).ceil() as usize).max(1),
-            ((side * size[1] / longer).ceil() as usize).max(1),
-        ];
-        let cell = [size[0] / n[0] as f64, size[1] / n[1] as f64];
-        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n[0] * n[1]];
-        for (i, e) in edges.iter().enumerate() {
-            let b = [e.a[0] + e.ab[0], e.a[1] + e.ab[1]];
-            let lo = |k: usize| {
-                (((e.a[k].min(b[k]) - min[k]) / cell[k]).floor().max(0.0) as usize).min(n[k] - 1)
-            };
-            let hi = |k: usize| {
-                (((e.a[k].max(b[k]) - min[k]) / cell[k]).floor().max(0.0) as usize).min(n[k] - 1)
-            };
-            for y in lo(1)..=hi(1) {
-                for x in lo(0)..=hi(0) {
-                    lists[y * n[0] + x].push(i as u32);
-                }
-            }
-        }
-        let mut start = Vec::with_capacity(lists.len() + 1);
-        let mut items = Vec::new();
-        start.push(0u32);
-        for l in &lists {
-            items.extend_from_slice(l);
-            start.push(items.len() as u32);
-        }
-        Self {
-            min,
-            max,
-            cell,
-            n,
-            start,
-            items,
-        }
-    }
 }
 
 #[cfg(test)]
