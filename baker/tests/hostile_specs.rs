@@ -84,6 +84,18 @@ fn make_aux(dir: &Path, aux: &str) {
             // SAFETY: a valid NUL-terminated path.
             assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
         }
+        "gen" if name.ends_with(".png") => {
+            // 4096² pixels of random noise: one huge outline with millions of holes.
+            let mut z = 0x5eed_u64;
+            let img = image::GrayImage::from_fn(4096, 4096, |_, _| {
+                z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+                let mut x = z;
+                x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+                x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+                image::Luma([if (x ^ (x >> 31)) & 1 == 0 { 0 } else { 255 }])
+            });
+            img.save(&p).unwrap();
+        }
         "gen" => {
             let text = match name {
                 "poly_200k.csv" => circle_csv(200_001, 5.0, None),

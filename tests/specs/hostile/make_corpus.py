@@ -165,6 +165,8 @@ fiber("fiber_mask_header_lies", ["{name: a, type: polyester, section: {mask: 001
       ["fibers.section.mask", "100000 × 100000"])
 fiber("fiber_mask_truncated_png", ["{name: a, type: polyester, section: {mask: 001_truncated.png, um_per_px: 0.25}}"], 2,
       ["fibers.section.mask"])
+fiber("fiber_mask_noise", ["{name: a, type: polyester, section: {mask: noise_4096.png, um_per_px: 0.003}}"], 2,
+      ["fibers.section.mask", "limits.polygon_vertices"], aux="gen:noise_4096.png")
 fiber("fiber_polygon_vertices_too_many", ["{name: a, type: polyester, section: {polygon: poly_200k.csv}}"], 2,
       ["fibers.section.polygon", "limits.polygon_vertices"], aux="gen:poly_200k.csv")
 fiber("fiber_polygon_self_crossing_big", ["{name: a, type: polyester, section: {polygon: poly_cross_25k.csv}}"], 2,

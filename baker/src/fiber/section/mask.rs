@@ -130,6 +130,17 @@ pub fn from_pixels(
             v[(y + 1) * pw + x + 1] = if fg { 1.0 } else { 0.0 };
         }
     }
+    // The fiber is the largest foreground region: the rest (dust, other fibers) is removed
+    // before contouring, whose cost then follows the fiber's own outline, which is bounded
+    // first (marching squares puts one vertex on every foreground/background pixel edge).
+    let (removed, edges) = keep_largest_region(&mut v, pw, ph);
+    if edges as u64 > o.max_vertices {
+        return Err(err(format!(
+            "the fiber's outline would have {edges} vertices, over the limit of {} \
+             (`limits.polygon_vertices`): is the mask a clean binary image?",
+            o.max_vertices
+        )));
+    }
     let contours = ContourBuilder::new(pw, ph, true)
         .contours(&v, &[0.5])
         .map_err(|e| err(format!("contour extraction failed: {e:?}")))?;
@@ -157,7 +168,7 @@ pub fn from_pixels(
         .filter(|hl| super::polygon::signed_area(hl).abs() >= o.min_hole_px)
         .collect();
     let report = MaskReport {
-        ignored_components: polys.len(),
+        ignored_components: polys.len() + removed,
         dropped_holes: n_holes - holes.len(),
         inverted: bright_border,
     };
@@ -178,6 +189,63 @@ pub fn from_pixels(
     let poly = Polygon::new(to_um(outer), holes.into_iter().map(to_um).collect())?;
     let c = poly.centroid();
     Ok((Section::Polygon(poly.transformed(c, 1.0)?), report))
+}
+
+/// Clears every foreground pixel (value 1) of `v` (`w` × `h`) outside its largest 8-connected
+/// foreground region; returns how many regions were cleared and the number of
+/// foreground/background pixel edges left (4-neighbours).
+fn keep_largest_region(v: &mut [f64], w: usize, h: usize) -> (usize, usize) {
+    let mut label = vec![0u32; w * h];
+    let mut sizes = vec![0usize]; // label 0: none
+    let mut stack = Vec::new();
+    for start in 0..w * h {
+        if v[start] == 0.0 || label[start] != 0 {
+            continue;
+        }
+        let id = sizes.len() as u32;
+        let mut size = 0;
+        label[start] = id;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            size += 1;
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            for dy in -1..=1isize {
+                for dx in -1..=1isize {
+                    let (nx, ny) = (x + dx, y + dy);
+                    if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                        continue;
+                    }
+                    let j = ny as usize * w + nx as usize;
+                    if v[j] != 0.0 && label[j] == 0 {
+                        label[j] = id;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        sizes.push(size);
+    }
+    let keep = (1..sizes.len())
+        .max_by_key(|&k| (sizes[k], std::cmp::Reverse(k)))
+        .unwrap_or(0);
+    for (x, l) in v.iter_mut().zip(&label) {
+        if *l != 0 && *l as usize != keep {
+            *x = 0.0;
+        }
+    }
+    let mut edges = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let a = v[y * w + x];
+            if x + 1 < w && v[y * w + x + 1] != a {
+                edges += 1;
+            }
+            if y + 1 < h && v[(y + 1) * w + x] != a {
+                edges += 1;
+            }
+        }
+    }
+    (sizes.len().saturating_sub(2), edges)
 }
 
 /// Taubin (1995) λ|μ smoothing of a closed loop: removes the pixel staircase without the
