@@ -15,7 +15,7 @@ What it does:
      `<include>`s it, and checks that the plugin holds the parameters of the chiang JSON
      (`targets.mitsuba`);
   4. evaluates that BSDF (`bsdf.eval`) at the JSON's test directions, whose values come from
-     the Rust model (baker/src/export/chiang.rs):
+     the Rust model (baker/src/export/chiang/):
        - `near`: si.wi = wi_local, wo = wo_local in Mitsuba's local frame (tangent y,
          normal z; h = sin gamma(wi));
        - `far`: the average over the fiber width, (1/2) int S dh, by the same composite
@@ -30,7 +30,7 @@ What it does:
   6. renders a 16 x 16 image of a hair-BSDF `bsplinecurve` under a constant emitter (the
      XML works in a scene);
   7. checks that the pbrt-v4 snippet and the Blender script carry the same parameters (pbrt:
-     the same numbers; Blender: Offset = -alpha in radians, see baker/src/export/hair.rs).
+     the same numbers; Blender: Offset = -alpha in radians, see baker/src/export/fiber/blender.rs).
 
 Exits 1 on any failure. Prints the largest relative differences.
 """

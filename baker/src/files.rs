@@ -202,6 +202,15 @@ impl fmt::Display for Shown<'_> {
     }
 }
 
+/// The SHA-256 of `bytes` in lower-case hex (provenance, manifests, stamps).
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest as _;
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

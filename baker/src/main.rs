@@ -13,14 +13,12 @@ fn main() {
         if broken_pipe {
             std::process::exit(0);
         }
-        // Interrupted bakes have said how to resume.
-        if e.downcast_ref::<baker::pipeline::interrupt::Interrupted>()
-            .is_some()
-        {
-            std::process::exit(baker::cli::pipeline::EXIT_INTERRUPTED);
+        let code = baker::error::exit_code(&e);
+        // Interrupted bakes have said how to resume; spec errors carry their own multi-line
+        // listing; others print their cause chain.
+        if code != baker::error::EXIT_INTERRUPTED {
+            eprintln!("error: {e:#}");
         }
-        // Spec errors carry their own multi-line listing; others print their cause chain.
-        eprintln!("error: {e:#}");
-        std::process::exit(e.downcast_ref::<baker::cli::UsageError>().map_or(1, |_| 2));
+        std::process::exit(code);
     }
 }

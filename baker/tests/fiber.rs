@@ -14,7 +14,7 @@ fn opts(photons: u64, seed: u64, res: f64, mua: &[f64]) -> TraceOptions {
         seed,
         grid: AngularGrid::new(res).unwrap(),
         mua_per_um: mua.to_vec(),
-        bar: None,
+        progress: None,
     }
 }
 

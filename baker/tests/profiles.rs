@@ -36,7 +36,7 @@ fn bake(yaml: &str, photons: u64, reuse: bool, max_boost: u64) -> Baked {
         seed: 11,
         threads: None,
         max_boost,
-        bar: None,
+        progress: None,
     };
     let spectral = profile::simulate(&entries, lam, &bins, &plan, &o, |_, _, _| {}).unwrap();
     let colour = ColourMap::new(lam);

@@ -3,7 +3,7 @@
 
 use baker::skin::{self, BodyLocation, Gender, MelaninInput, SkinParams, SkinType};
 use baker::spectral::WavelengthGrid;
-use baker::transport::{self, stack, Grid, Junction, Layer, McOptions, McResult, Stack};
+use baker::transport::{self, stack, Junction, Layer, McOptions, McResult, RadialGrid, Stack};
 
 fn slab(n: f64, n_out: f64, d_mm: f64, mua: f64, mus: f64, g: f64) -> Stack {
     Stack {
@@ -18,7 +18,7 @@ fn slab(n: f64, n_out: f64, d_mm: f64, mua: f64, mus: f64, g: f64) -> Stack {
             g,
         }],
         junction: None,
-        grid: Grid {
+        grid: RadialGrid {
             dr_mm: 0.01,
             nr: 200,
         },

@@ -6,7 +6,8 @@
 //! Fiber frame: axis +z. A direction ω (unit vector, pointing away from the fiber for ωo and
 //! towards the light for ωi) has θ = asin(ω·z) ∈ [−90°, 90°] and φ = atan2(ω·y, ω·x).
 //! Outgoing azimuths are relative: Δφ = φo − φi wrapped to [−180°, 180°). The grid has
-//! `n_theta = 180/res` θ bins from −90° and `n_phi = 360/res` φ (or Δφ) bins from −180°.
+//! `n_theta = 180/res` θ bins from −90° and `n_phi = 360/res` φ (or Δφ) bins from −180°
+//! ([`AngularGrid`], [`Directory::grid`]).
 //!
 //! # What is stored
 //! Per stored ωi, per variant (dye × depth of shade) and channel (R, G, B or one wavelength):
@@ -40,12 +41,14 @@
 //! first byte of every value, then the second byte of every value, and so on (as HDF5's
 //! shuffle filter). A value times `scale[i][variant][channel]` is f̂.
 
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::PI;
 use std::path::Path;
 use std::sync::OnceLock;
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::grid::solid_angle;
+use crate::grid::AngularGrid;
 use crate::table::{crc32, decompress, TableError};
 
 /// The first 8 bytes of every file.
@@ -148,6 +151,15 @@ impl Directory {
     /// Values per variant and channel in one slice.
     pub fn bins(&self) -> usize {
         self.n_theta * self.n_phi
+    }
+
+    /// The θ × φ grid of the stored slices and of `wi_map`.
+    pub fn grid(&self) -> AngularGrid {
+        AngularGrid {
+            res_deg: self.res_deg,
+            n_theta: self.n_theta,
+            n_phi: self.n_phi,
+        }
     }
 
     fn check(&self) -> Result<(), TableError> {
@@ -568,11 +580,7 @@ impl Bcsdf {
     }
 
     fn bin_of(&self, theta: f64, phi: f64) -> (usize, usize) {
-        let r = self.dir.res_deg.to_radians();
-        let it = (((theta + FRAC_PI_2) / r) as usize).min(self.dir.n_theta - 1);
-        let p = phi - TAU * ((phi + PI) / TAU).floor();
-        let jp = (((p + PI) / r) as usize).min(self.dir.n_phi - 1);
-        (it, jp)
+        self.dir.grid().cell(theta, phi)
     }
 
     /// Stored index and flags of incoming direction `wi`, and its φi.
@@ -706,7 +714,7 @@ impl Bcsdf {
         let row = &sl.cdf_phi[variant][it * d.n_phi..(it + 1) * d.n_phi];
         let (jp, r2) = pick(row, u2);
         let res = d.res_deg.to_radians();
-        let t0 = -FRAC_PI_2 + it as f64 * res;
+        let t0 = d.grid().theta_lower_rad(it);
         let (s0, s1) = (t0.sin(), (t0 + res).sin());
         let theta = (s0 + (s1 - s0) * r1).clamp(-1.0, 1.0).asin();
         let dphi = -PI + (jp as f64 + r2) * res;
@@ -775,13 +783,6 @@ fn pick(cdf: &[f64], u: f64) -> (usize, f64) {
         0.5
     };
     (i, r)
-}
-
-/// Solid angle of θ row `it` (one Δφ bin) at `res_deg`, sr.
-pub fn solid_angle(res_deg: f64, it: usize) -> f64 {
-    let r = res_deg.to_radians();
-    let t0 = -FRAC_PI_2 + it as f64 * r;
-    r * ((t0 + r).sin() - t0.sin())
 }
 
 #[cfg(test)]
@@ -871,10 +872,11 @@ mod tests {
         let f = Bcsdf::from_bytes(bytes).unwrap();
         let wi = direction((-20f64).to_radians(), 50f64.to_radians());
         let mut total = 0.0;
+        let g = f.dir.grid();
         for it in 0..6 {
             for j in 0..12 {
-                let t = (-90.0 + (it as f64 + 0.5) * 30.0).to_radians();
-                let p = 50f64.to_radians() + (-180.0 + (j as f64 + 0.5) * 30.0).to_radians();
+                let t = g.theta_centre_deg(it).to_radians();
+                let p = 50f64.to_radians() + g.phi_centre_deg(j).to_radians();
                 total += f.pdf(wi, direction(t, p), 0).unwrap() * solid_angle(30.0, it);
             }
         }

@@ -4,11 +4,13 @@
 //! to read what the baker writes. Each format documents its layout in its module.
 
 pub mod bcsdf;
+pub mod grid;
 pub mod optics;
 pub mod profile;
 pub mod table;
 
 pub use bcsdf::{Bcsdf, Precision};
+pub use grid::AngularGrid;
 /// The fiber BCSDF table reader under the name the renderer-facing docs use.
 pub type BcsdfTable = Bcsdf;
 pub use optics::{

@@ -57,10 +57,14 @@ pub struct OpticsLayer {
 /// The dermo-epidermal junction z = z̄ + A·sin(ωx·x + φx)·sin(ωy·y + φy) (z into the skin).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct OpticsJunction {
+    /// Mean depth z̄ of the living-epidermis / papillary-dermis interface, mm.
     pub z_mean_mm: f64,
+    /// Peak amplitude A, mm (0 = planar).
     pub amplitude_mm: f64,
+    /// Angular spatial frequencies ωx, ωy, rad/mm.
     pub omega_x_per_mm: f64,
     pub omega_y_per_mm: f64,
+    /// Phases φx, φy, rad.
     pub phi_x_rad: f64,
     pub phi_y_rad: f64,
 }
@@ -68,13 +72,21 @@ pub struct OpticsJunction {
 /// Surface reflection: Beckmann roughness m and normal-incidence Fresnel F0.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct OpticsSurface {
+    /// Mean peak-to-valley height of the skin profile, µm.
     pub rz_um: f64,
+    /// Sebum production, mg lipid / 10 cm² / 3 h.
     pub sebum_mg_per_10cm2_3h: f64,
+    /// Sebum film thickness s, µm.
     pub sebum_film_um: f64,
+    /// α_sr = arctan(Rz / l_e), rad (thesis §3.4.2).
     pub alpha_sr_rad: f64,
+    /// ψ_s = 1 − a_s/a_t (thesis Eq. 11).
     pub psi_s: f64,
+    /// Beckmann roughness m = ψ_s·α_sr (thesis Eq. 11).
     pub beckmann_m: f64,
+    /// Refractive index of the outer surface (stratum corneum, thesis Table 1).
     pub eta: f64,
+    /// Normal-incidence Fresnel reflectance from air, ((η − 1)/(η + 1))².
     pub f0: f64,
 }
 

@@ -687,6 +687,85 @@ impl TableIndex {
     /// Checks the header and directory of a file held in memory (the arrays' frames are
     /// checked when they are decoded).
     pub fn from_bytes(b: Vec<u8>) -> Result<TableIndex, TableError> {
+        let header = Header::read(&b)?;
+        // Both fit in `b`, hence in usize.
+        let dir_end = HEADER_LEN + header.dir_compressed as usize;
+        let dir = header.directory(&b[HEADER_LEN..dir_end])?;
+        let (entries, by_name) = index_entries(dir.arrays, header.payload_len)?;
+        Ok(TableIndex {
+            kind: dir.kind,
+            metadata: dir.metadata,
+            entries,
+            by_name,
+            bytes: b,
+            payload_start: dir_end,
+        })
+    }
+
+    /// The arrays, in file order.
+    pub fn entries(&self) -> &[IndexEntry] {
+        &self.entries
+    }
+
+    /// The array called `name`, undecoded.
+    pub fn entry(&self, name: &str) -> Option<&IndexEntry> {
+        self.by_name.get(name).map(|&i| &self.entries[i])
+    }
+
+    /// Decodes (and checks) the array called `name`; `Ok(None)` if there is none.
+    pub fn array(&self, name: &str) -> Result<Option<Array>, TableError> {
+        match self.by_name.get(name) {
+            Some(&i) => self.read_at(i).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    /// Decodes every array once (checksums, sizes) without keeping them.
+    pub fn verify(&self) -> Result<(), TableError> {
+        (0..self.entries.len()).try_for_each(|i| self.read_at(i).map(|_| ()))
+    }
+
+    /// Decodes (and checks) array number `i` in file order.
+    pub fn read_at(&self, i: usize) -> Result<Array, TableError> {
+        let e = self
+            .entries
+            .get(i)
+            .ok_or_else(|| TableError::Invalid(format!("no array #{i}")))?;
+        let what = format!("array {:?}", e.name);
+        // Bounds were checked against the payload when the directory was read.
+        let start = self.payload_start + e.offset as usize;
+        let frame = &self.bytes[start..start + e.compressed_bytes as usize];
+        let raw = decompress(frame, e.raw_bytes, &what)?;
+        let computed = crc32(&raw);
+        if computed != e.crc32 {
+            return Err(TableError::Checksum {
+                part: what,
+                stored: e.crc32,
+                computed,
+            });
+        }
+        let data = Data::from_le_bytes(e.dtype, &raw)
+            .ok_or_else(|| TableError::Format(format!("{what}: ragged element data")))?;
+        Ok(Array {
+            name: e.name.clone(),
+            shape: e.shape.clone(),
+            data,
+            attrs: e.attrs.clone(),
+        })
+    }
+}
+
+/// The fixed header of a file, checked: magic, version, flags, reserved field, and lengths
+/// that add up to the file's size.
+struct Header {
+    dir_compressed: u64,
+    dir_raw: u64,
+    payload_len: u64,
+    dir_crc: u32,
+}
+
+impl Header {
+    fn read(b: &[u8]) -> Result<Header, TableError> {
         let fmt_err = TableError::Format;
         if b.len() < HEADER_LEN {
             if !b.is_empty() && !MAGIC.starts_with(&b[..b.len().min(8)]) {
@@ -730,14 +809,23 @@ impl TableIndex {
                  payload, but {body} bytes follow the header (truncated or trailing data)"
             )));
         }
-        // Both fit in `b`, hence in usize.
-        let dir_end = HEADER_LEN + dir_compressed as usize;
-        let dir_bytes = decompress(&b[HEADER_LEN..dir_end], dir_raw, "the directory")?;
+        Ok(Header {
+            dir_compressed,
+            dir_raw,
+            payload_len,
+            dir_crc,
+        })
+    }
+
+    /// The directory from its zstd frame `frame`, checked against the header's CRC-32.
+    fn directory(&self, frame: &[u8]) -> Result<DirectoryIn, TableError> {
+        let fmt_err = TableError::Format;
+        let dir_bytes = decompress(frame, self.dir_raw, "the directory")?;
         let computed = crc32(&dir_bytes);
-        if computed != dir_crc {
+        if computed != self.dir_crc {
             return Err(TableError::Checksum {
                 part: "directory".into(),
-                stored: dir_crc,
+                stored: self.dir_crc,
                 computed,
             });
         }
@@ -747,130 +835,88 @@ impl TableIndex {
         if dir.kind.is_empty() {
             return Err(fmt_err("the table kind is empty".into()));
         }
+        Ok(dir)
+    }
+}
 
-        let mut names = BTreeMap::new();
-        let mut next_offset = 0u64;
-        let mut entries = Vec::with_capacity(dir.arrays.len().min(1 << 16));
-        for (i, e) in dir.arrays.into_iter().enumerate() {
-            let what = format!("array {:?}", e.name);
-            check_name(&e.name).map_err(|m| fmt_err(format!("array #{i}: {m}")))?;
-            if names.insert(e.name.clone(), i).is_some() {
-                return Err(fmt_err(format!("duplicate array name {:?}", e.name)));
-            }
-            let dtype = DType::from_code(&e.dtype).ok_or_else(|| {
+/// The directory's arrays, checked (names, dtypes, sizes, frames back to back filling the
+/// `payload_len`-byte payload), and their indices by name.
+fn index_entries(
+    arrays: Vec<EntryIn>,
+    payload_len: u64,
+) -> Result<(Vec<IndexEntry>, BTreeMap<String, usize>), TableError> {
+    let fmt_err = TableError::Format;
+    let mut names = BTreeMap::new();
+    let mut next_offset = 0u64;
+    let mut entries = Vec::with_capacity(arrays.len().min(1 << 16));
+    for (i, e) in arrays.into_iter().enumerate() {
+        check_name(&e.name).map_err(|m| fmt_err(format!("array #{i}: {m}")))?;
+        if names.insert(e.name.clone(), i).is_some() {
+            return Err(fmt_err(format!("duplicate array name {:?}", e.name)));
+        }
+        let entry = index_entry(e, next_offset)?;
+        next_offset = entry
+            .offset
+            .checked_add(entry.compressed_bytes)
+            .filter(|&end| end <= payload_len)
+            .ok_or_else(|| {
                 fmt_err(format!(
-                    "{what}: unknown dtype {:?} (expected f64, f32, u32 or u64)",
-                    e.dtype
+                    "array {:?}: frame at {} + {} bytes runs past the {payload_len}-byte payload",
+                    entry.name, entry.offset, entry.compressed_bytes
                 ))
             })?;
-            let count = element_count(&e.shape).ok_or_else(|| {
-                fmt_err(format!(
-                    "{what}: element count of shape {:?} overflows",
-                    e.shape
-                ))
-            })?;
-            if count.checked_mul(dtype.size() as u64) != Some(e.raw_bytes) {
-                return Err(fmt_err(format!(
-                    "{what}: shape {:?} of {dtype} needs {count} × {} bytes, the directory says \
-                     raw_bytes = {}",
-                    e.shape,
-                    dtype.size(),
-                    e.raw_bytes
-                )));
-            }
-            if e.offset != next_offset {
-                return Err(fmt_err(format!(
-                    "{what}: offset {} but frames must be back to back (expected {next_offset})",
-                    e.offset
-                )));
-            }
-            next_offset = e
-                .offset
-                .checked_add(e.compressed_bytes)
-                .filter(|&end| end <= payload_len)
-                .ok_or_else(|| {
-                    fmt_err(format!(
-                        "{what}: frame at {} + {} bytes runs past the {payload_len}-byte payload",
-                        e.offset, e.compressed_bytes
-                    ))
-                })?;
-            entries.push(IndexEntry {
-                name: e.name,
-                dtype,
-                shape: e.shape,
-                attrs: e.attrs,
-                offset: e.offset,
-                compressed_bytes: e.compressed_bytes,
-                raw_bytes: e.raw_bytes,
-                crc32: e.crc32,
-            });
-        }
-        if next_offset != payload_len {
-            return Err(fmt_err(format!(
-                "the arrays' frames cover {next_offset} bytes of the {payload_len}-byte payload"
-            )));
-        }
-        Ok(TableIndex {
-            kind: dir.kind,
-            metadata: dir.metadata,
-            entries,
-            by_name: names,
-            bytes: b,
-            payload_start: dir_end,
-        })
+        entries.push(entry);
     }
+    if next_offset != payload_len {
+        return Err(fmt_err(format!(
+            "the arrays' frames cover {next_offset} bytes of the {payload_len}-byte payload"
+        )));
+    }
+    Ok((entries, names))
+}
 
-    /// The arrays, in file order.
-    pub fn entries(&self) -> &[IndexEntry] {
-        &self.entries
+/// One directory entry, checked: a known dtype, a shape whose size is `raw_bytes`, and a frame
+/// right after the previous one (at `next_offset`).
+fn index_entry(e: EntryIn, next_offset: u64) -> Result<IndexEntry, TableError> {
+    let fmt_err = TableError::Format;
+    let what = format!("array {:?}", e.name);
+    let dtype = DType::from_code(&e.dtype).ok_or_else(|| {
+        fmt_err(format!(
+            "{what}: unknown dtype {:?} (expected f64, f32, u32 or u64)",
+            e.dtype
+        ))
+    })?;
+    let count = element_count(&e.shape).ok_or_else(|| {
+        fmt_err(format!(
+            "{what}: element count of shape {:?} overflows",
+            e.shape
+        ))
+    })?;
+    if count.checked_mul(dtype.size() as u64) != Some(e.raw_bytes) {
+        return Err(fmt_err(format!(
+            "{what}: shape {:?} of {dtype} needs {count} × {} bytes, the directory says \
+             raw_bytes = {}",
+            e.shape,
+            dtype.size(),
+            e.raw_bytes
+        )));
     }
-
-    /// The array called `name`, undecoded.
-    pub fn entry(&self, name: &str) -> Option<&IndexEntry> {
-        self.by_name.get(name).map(|&i| &self.entries[i])
+    if e.offset != next_offset {
+        return Err(fmt_err(format!(
+            "{what}: offset {} but frames must be back to back (expected {next_offset})",
+            e.offset
+        )));
     }
-
-    /// Decodes (and checks) the array called `name`; `Ok(None)` if there is none.
-    pub fn array(&self, name: &str) -> Result<Option<Array>, TableError> {
-        match self.by_name.get(name) {
-            Some(&i) => self.read_at(i).map(Some),
-            None => Ok(None),
-        }
-    }
-
-    /// Decodes (and checks) array number `i` in file order.
-    /// Decodes every array once (checksums, sizes) without keeping them.
-    pub fn verify(&self) -> Result<(), TableError> {
-        (0..self.entries.len()).try_for_each(|i| self.read_at(i).map(|_| ()))
-    }
-
-    pub fn read_at(&self, i: usize) -> Result<Array, TableError> {
-        let e = self
-            .entries
-            .get(i)
-            .ok_or_else(|| TableError::Invalid(format!("no array #{i}")))?;
-        let what = format!("array {:?}", e.name);
-        // Bounds were checked against the payload when the directory was read.
-        let start = self.payload_start + e.offset as usize;
-        let frame = &self.bytes[start..start + e.compressed_bytes as usize];
-        let raw = decompress(frame, e.raw_bytes, &what)?;
-        let computed = crc32(&raw);
-        if computed != e.crc32 {
-            return Err(TableError::Checksum {
-                part: what,
-                stored: e.crc32,
-                computed,
-            });
-        }
-        let data = Data::from_le_bytes(e.dtype, &raw)
-            .ok_or_else(|| TableError::Format(format!("{what}: ragged element data")))?;
-        Ok(Array {
-            name: e.name.clone(),
-            shape: e.shape.clone(),
-            data,
-            attrs: e.attrs.clone(),
-        })
-    }
+    Ok(IndexEntry {
+        name: e.name,
+        dtype,
+        shape: e.shape,
+        attrs: e.attrs,
+        offset: e.offset,
+        compressed_bytes: e.compressed_bytes,
+        raw_bytes: e.raw_bytes,
+        crc32: e.crc32,
+    })
 }
 
 /// Decompresses exactly one zstd frame that must fill `src` and yield `raw_len` bytes.

@@ -1,12 +1,14 @@
 //! `baker export TABLE --to FORMAT [--entry NAME] [-o FILE]`.
 
-use std::path::PathBuf;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 
+use anyhow::Context as _;
 use clap::Args;
 
-use super::UsageError;
+use crate::error::UsageError;
 
-use crate::export::ExportRequest;
+use crate::export::{Export, ExportRequest};
 
 #[derive(Debug, Args)]
 pub struct ExportArgs {
@@ -30,37 +32,93 @@ pub fn run(a: ExportArgs) -> anyhow::Result<()> {
         table: a.table,
         to: a.to,
         entry: a.entry,
-        output: a.output,
     };
-    let mut head = [0u8; 8];
-    {
-        use std::io::Read as _;
-        // A table is a regular file: a directory or device is named as such, not opened.
-        match std::fs::metadata(&req.table) {
-            Ok(m) if m.is_file() => {}
-            Ok(m) => {
-                return Err(UsageError(format!(
-                    "{}: is {}; expected a baked table (profiles.bkt or a .bcsdf file)",
-                    req.table.display(),
-                    crate::files::special_kind(&m.file_type()).unwrap_or("not a regular file")
-                ))
-                .into())
-            }
-            Err(e) => {
-                return Err(UsageError(format!("{}: {e}", req.table.display())).into());
-            }
-        }
-        let mut f = std::fs::File::open(&req.table)
-            .map_err(|e| anyhow::anyhow!("cannot open {}: {e}", req.table.display()))?;
-        let _ = f.read(&mut head)?;
-    }
-    match &head {
-        b"BAKERTBL" => crate::export::skin::run(&req),
-        b"BAKERFIB" => crate::export::hair::run(&req),
-        _ => Err(UsageError(format!(
+    let head = read_head(&req.table)?;
+    let export = if head == formats::table::MAGIC {
+        crate::export::skin::export(&req)?
+    } else if head == formats::bcsdf::MAGIC {
+        crate::export::fiber::export(&req)?
+    } else {
+        return Err(UsageError(format!(
             "{}: not a baker table (expected profiles.bkt or a .bcsdf file)",
             req.table.display()
         ))
-        .into()),
+        .into());
+    };
+    emit(&export, a.output.as_deref())
+}
+
+/// The first 8 bytes of `table` (the file magic), zero-filled if it is shorter.
+fn read_head(table: &Path) -> anyhow::Result<[u8; 8]> {
+    use std::io::Read as _;
+    let mut head = [0u8; 8];
+    // A table is a regular file: a directory or device is named as such, not opened.
+    match std::fs::metadata(table) {
+        Ok(m) if m.is_file() => {}
+        Ok(m) => {
+            return Err(UsageError(format!(
+                "{}: is {}; expected a baked table (profiles.bkt or a .bcsdf file)",
+                table.display(),
+                crate::files::special_kind(&m.file_type()).unwrap_or("not a regular file")
+            ))
+            .into())
+        }
+        Err(e) => {
+            return Err(UsageError(format!("{}: {e}", table.display())).into());
+        }
+    }
+    let mut f = std::fs::File::open(table)
+        .map_err(|e| anyhow::anyhow!("cannot open {}: {e}", table.display()))?;
+    let _ = f.read(&mut head)?;
+    Ok(head)
+}
+
+/// Prints the export's summary to stderr, then writes its document to `output` (atomically)
+/// or stdout, then confirms a file write where the export says what it wrote.
+fn emit(export: &Export, output: Option<&Path>) -> anyhow::Result<()> {
+    if let Some(line) = &export.summary {
+        eprintln!("{line}");
+    }
+    match output {
+        Some(path) => {
+            crate::output::atomic::write(path, export.text.as_bytes())
+                .with_context(|| format!("writing {}", path.display()))?;
+            if let Some(what) = &export.written {
+                eprintln!(
+                    "baker export: {what} → {} ({})",
+                    path.display(),
+                    export.target
+                );
+            }
+        }
+        None => {
+            let mut out = std::io::stdout().lock();
+            out.write_all(export.text.as_bytes())?;
+            out.flush()?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_export_writes_nothing() {
+        // An unknown target and an unknown entry: usage errors, and no file.
+        let dir = tempfile::tempdir().unwrap();
+        let table = crate::export::skin::tests::synthetic_table(dir.path());
+        let out = dir.path().join("x");
+        for (to, entry) in [("povray", None), ("unreal", Some("typeIV"))] {
+            let e = run(ExportArgs {
+                table: table.clone(),
+                to: to.into(),
+                entry: entry.map(str::to_string),
+                output: Some(out.clone()),
+            })
+            .unwrap_err();
+            assert!(!out.exists(), "{to}: {e:#}");
+        }
     }
 }

@@ -6,11 +6,10 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 use serde_json::json;
 
-use super::UsageError;
+use crate::error::UsageError;
 use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
 use crate::fiber::{trace, AngularGrid, Cuticle, Fiber, Incident, Section, Surface, TraceOptions};
-use crate::spec::fiber as fspec;
 
 #[derive(Debug, Subcommand)]
 pub enum FiberCommand {
@@ -19,11 +18,11 @@ pub enum FiberCommand {
     Trace(TraceArgs),
     /// Tracer throughput (photons/s) for each fiber of a spec (default `specs/fibers.yaml`)
     /// and a smooth circular fiber, at each thread count.
-    Bench(BenchArgs),
+    Bench(FiberBenchArgs),
 }
 
 #[derive(Debug, Args)]
-pub struct BenchArgs {
+pub struct FiberBenchArgs {
     /// Fiber spec whose entries are measured.
     #[arg(default_value = "specs/fibers.yaml")]
     pub spec: PathBuf,
@@ -112,8 +111,9 @@ pub fn run(c: FiberCommand) -> anyhow::Result<()> {
     }
 }
 
-fn run_bench(a: BenchArgs) -> anyhow::Result<()> {
-    let s = fspec::load(&a.spec).map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+fn run_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
+    let s = crate::spec::load_fiber(&a.spec)
+        .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
     let smooth = Fiber {
         section: Section::circle(10.0),
         surface: Surface {
@@ -150,7 +150,7 @@ fn run_bench(a: BenchArgs) -> anyhow::Result<()> {
                 seed: 1,
                 grid: AngularGrid::new(2.0).map_err(usage)?,
                 mua_per_um: vec![*mua],
-                bar: None,
+                progress: None,
             };
             let best = (0..a.repeat.max(1))
                 .map(|_| {
@@ -274,10 +274,12 @@ fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
     Ok((fiber, a.mua_per_um.unwrap_or(0.0), s.to_string()))
 }
 
-fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
-    let (fiber, mua, label) = match &a.spec {
+/// The fiber to trace (a spec entry, or the flags), its μa per µm and its label.
+fn fiber_of(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
+    match &a.spec {
         Some(spec) => {
-            let s = fspec::load(spec).map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+            let s = crate::spec::load_fiber(spec)
+                .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
             let name = a
                 .entry
                 .as_deref()
@@ -294,10 +296,14 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
                 ))
             })?;
             let mua = a.mua_per_um.unwrap_or_else(|| e.mua_per_um(a.lambda_nm));
-            (e.fiber(), mua, e.name.clone())
+            Ok((e.fiber(), mua, e.name.clone()))
         }
-        None => fiber_from_flags(&a)?,
-    };
+        None => fiber_from_flags(a),
+    }
+}
+
+fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
+    let (fiber, mua, label) = fiber_of(&a)?;
     if !(-90.0..=90.0).contains(&a.theta_i) {
         return Err(usage(format!(
             "--theta-i {} out of range [-90, 90]",
@@ -318,7 +324,7 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
         seed: a.seed,
         grid,
         mua_per_um: vec![mua],
-        bar: bar.clone(),
+        progress: crate::cli::progress::reporter(&bar),
     };
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(t) = a.threads {
@@ -334,7 +340,16 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     let (h2, h2_se) = t.hist2d(0);
     let (dh, dh_se) = t.dphi_hist(0);
     if let Some(png) = &a.png {
-        crate::output::slice::write_slice_png(png, &grid, &h2, 4)?;
+        // Radiance-like density: fraction per solid angle and cos θo.
+        let (nt, np) = (grid.n_theta, grid.n_phi);
+        let density: Vec<f64> = (0..nt * np)
+            .map(|b| {
+                let it = b / np;
+                let t_mid = grid.theta_centre_deg(it).to_radians();
+                h2[b] / (grid.solid_angle(it) * t_mid.cos().max(1e-6))
+            })
+            .collect();
+        crate::output::slice::write_slice_png(png, (nt, np), &density, 4)?;
     }
     let (iw, iw_se) = r.intercepted_width_um();
     if a.json {

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 
-use super::{load_spec, UsageError};
+use super::optics::load_spec;
+use crate::error::UsageError;
 use crate::output::atomic;
 use crate::transport::{self, mcml, McOptions, McResult, Stack};
 
@@ -52,7 +53,6 @@ pub struct McArgs {
 pub fn run(a: McArgs) -> anyhow::Result<()> {
     let mut o = McOptions::new(a.photons.unwrap_or(1_000_000), a.seed);
     o.threads = a.threads;
-    o.progress = !a.json;
     o.random_entry = a.random_entry;
     if a.photons == Some(0) {
         return Err(UsageError("--photons must be at least 1".into()).into());
@@ -67,7 +67,7 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
             if a.photons.is_none() {
                 ok.photons = run.photons; // the file's own photon count unless --photons is given
             }
-            let (r, grid) = mcml::simulate_grid(run, &ok)?;
+            let (r, grid) = with_bar(&ok, a.json, |o| mcml::simulate_grid(run, o))?;
             report(&r, a.json)?;
             let out = match (&a.mco, runs.len()) {
                 (Some(p), 1) => p.clone(),
@@ -100,16 +100,32 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
     };
     if let Some(out) = &a.mco {
         let run = mcml::McmlRun::from_stack(&stack, o.photons);
-        let (r, grid) = mcml::simulate_grid(&run, &o)?;
+        let (r, grid) = with_bar(&o, a.json, |o| mcml::simulate_grid(&run, o))?;
         report(&r, a.json)?;
         atomic::write(out, mcml::write_mco(&run, &r, &grid).as_bytes())
             .with_context(|| format!("writing {}", out.display()))?;
         eprintln!("wrote {}", out.display());
     } else {
-        let r = transport::run(&stack, &o)?;
+        let r = with_bar(&o, a.json, |o| transport::run(&stack, o))?;
         report(&r, a.json)?;
     }
     Ok(())
+}
+
+/// Runs `f` with a progress bar over `o.photons` on a terminal (none with `--json`).
+fn with_bar<T>(
+    o: &McOptions,
+    json: bool,
+    f: impl FnOnce(&McOptions) -> anyhow::Result<T>,
+) -> anyhow::Result<T> {
+    let bar = (!json).then(|| super::progress::bar(o.photons, "photons"));
+    let mut with = o.clone();
+    with.progress = super::progress::reporter(&bar);
+    let r = f(&with);
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    r
 }
 
 pub fn read_stack(path: &std::path::Path) -> anyhow::Result<Stack> {

@@ -17,24 +17,22 @@ macro_rules! out {
 }
 
 mod bake;
-mod bake_fiber;
 mod bench;
+mod cache;
 mod export;
 mod fiber;
 mod mc;
+mod merge;
+mod observer;
 mod optics;
-pub mod pipeline;
+mod plan;
 mod progress;
 mod slurm;
+mod validate;
 
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
-
-/// A user error (bad spec, bad flag combination): exit code 2.
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct UsageError(pub String);
 
 #[derive(Debug, Parser)]
 #[command(
@@ -73,89 +71,28 @@ pub enum Command {
     Export(export::ExportArgs),
     /// Combine shard directories (`baker bake --shard I/N`) into the tables one bake would
     /// write, byte for byte.
-    Merge(pipeline::MergeArgs),
+    Merge(merge::MergeArgs),
     /// List the work units of specs, their cost and whether they are cached.
-    Plan(pipeline::PlanArgs),
+    Plan(plan::PlanArgs),
     /// Bake on a Slurm cluster: an array job of shards and a dependent merge job.
     Slurm(slurm::SlurmArgs),
     /// Manage the work-unit cache.
     #[command(subcommand)]
-    Cache(pipeline::CacheCommand),
+    Cache(cache::CacheCommand),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Validate { spec } => validate(&spec),
+        Command::Validate { spec } => validate::run(&spec),
         Command::Optics(a) => optics::run(a),
         Command::Bake(a) => bake::run(a),
         Command::Mc(a) => mc::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Fiber(c) => fiber::run(c),
         Command::Export(a) => export::run(a),
-        Command::Merge(m) => pipeline::merge(m),
-        Command::Plan(p) => pipeline::plan(p),
-        Command::Cache(c) => pipeline::cache(c),
+        Command::Merge(m) => merge::run(m),
+        Command::Plan(p) => plan::run(p),
+        Command::Cache(c) => cache::run(c),
         Command::Slurm(a) => slurm::run(a),
     }
-}
-
-/// `baker validate`: the checks `baker bake` makes before it writes anything — the same code
-/// path — and what the spec defines.
-fn validate(spec: &std::path::Path) -> anyhow::Result<()> {
-    let (s, cost) = bake::load_checked(spec, &crate::spec::budget::Overrides::none())?;
-    bake::spec_stem(spec)?;
-    match &s {
-        crate::spec::Spec::Fiber(s) => {
-            outln!(
-                "{}: ok, {} fibers, {} dyes (presets included); {}",
-                spec.display(),
-                s.fibers.len(),
-                s.dyes.len(),
-                cost.describe()
-            )?;
-            for f in &s.fibers {
-                outln!(
-                    "  {} (line {}): {}, {:.2} µm, area {:.1} µm², {} hole(s), η {:.4}, β {:.2}°{}{}",
-                    f.name,
-                    f.line,
-                    f.fiber_type.name,
-                    f.diameter_um,
-                    f.section.area_um2(),
-                    f.section.hole_count(),
-                    f.eta,
-                    f.beta_deg,
-                    f.cuticle.map_or(String::new(), |c| format!(
-                        ", cuticle {} µm × {}°",
-                        c.length_um, c.tilt_deg
-                    )),
-                    f.dye.as_ref().map_or(String::new(), |(d, z)| format!(
-                        ", {} at {}% (μa(550 nm) = {:.3} /mm)",
-                        d.name,
-                        z * 100.0,
-                        f.mua_per_um(550.0) * 1e3
-                    )),
-                )?;
-            }
-        }
-        crate::spec::Spec::Skin(s) => {
-            outln!(
-                "{}: ok, {} entries, {} wavelengths ({}–{} nm); {}",
-                spec.display(),
-                s.entries.len(),
-                s.wavelengths.len(),
-                s.wavelengths.lambda_nm()[0],
-                s.wavelengths.lambda_nm()[s.wavelengths.len() - 1],
-                cost.describe()
-            )?;
-            for e in &s.entries {
-                outln!("  {} (line {})", e.name, e.line)?;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Loads a spec; its errors become a [`UsageError`] listing every problem.
-pub(crate) fn load_spec(path: &std::path::Path) -> anyhow::Result<crate::spec::SkinSpec> {
-    crate::spec::load(path).map_err(|e| UsageError(e.to_string().trim_end().to_string()).into())
 }

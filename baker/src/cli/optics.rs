@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 
-use super::{load_spec, UsageError};
-use crate::output::{self, atomic, mci::MciRun, plot::Quantity};
+use crate::error::UsageError;
+use crate::output::{self, atomic, mci::MciRun};
 use crate::spec::SkinSpec;
 
 #[derive(Debug, Args)]
@@ -57,7 +57,9 @@ pub fn evaluate_entries(
         ))
         .into());
     }
-    super::bake::skin_optics(spec, |e| only.is_none_or(|n| e.name == n))
+    Ok(crate::bake::skin::optics_of(spec, |e| {
+        only.is_none_or(|n| e.name == n)
+    }))
 }
 
 pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
@@ -127,16 +129,8 @@ pub fn write_plots(
     lam: &[f64],
     entries: &[formats::OpticsEntry],
 ) -> anyhow::Result<()> {
-    for e in entries {
-        for (q, suffix) in [
-            (Quantity::Absorption, "mua"),
-            (Quantity::ReducedScattering, "musp"),
-        ] {
-            let p = dir.join(format!("{}_{suffix}.png", e.name));
-            output::plot::plot(&p, lam, e, q)
-                .with_context(|| format!("plotting {}", p.display()))?;
-            eprintln!("wrote {}", p.display());
-        }
+    for p in output::plot::optics_plots(dir, lam, entries)? {
+        eprintln!("wrote {}", p.display());
     }
     Ok(())
 }
@@ -192,4 +186,9 @@ pub fn text_report(lam: &[f64], entries: &[formats::OpticsEntry]) -> String {
         s.push('\n');
     }
     s
+}
+
+/// Loads a spec; its errors become a [`UsageError`] listing every problem.
+pub fn load_spec(path: &std::path::Path) -> anyhow::Result<crate::spec::SkinSpec> {
+    crate::spec::load(path).map_err(|e| UsageError(e.to_string().trim_end().to_string()).into())
 }

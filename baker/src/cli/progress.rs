@@ -21,3 +21,15 @@ pub fn bar(total: u64, msg: &str) -> ProgressBar {
     b.set_message(msg.to_string());
     b
 }
+
+impl crate::progress::Progress for ProgressBar {
+    fn advance(&self, n: u64) {
+        self.inc(n);
+    }
+}
+
+/// `bar` as the library's progress sink.
+pub fn reporter(bar: &Option<ProgressBar>) -> crate::progress::Reporter {
+    bar.clone()
+        .map(|b| std::sync::Arc::new(b) as std::sync::Arc<dyn crate::progress::Progress>)
+}

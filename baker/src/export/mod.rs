@@ -2,21 +2,24 @@
 //!
 //! - [`skin`]: skin profile tables (`profiles.bkt`) → Christensen–Burley normalized diffusion
 //!   ([`burley`]) and the documents of OpenPBR/MaterialX, Blender, Unreal, Unity HDRP, pbrt-v4
-//!   and Mitsuba 3.
-//! - [`hair`]: fiber BCSDF tables (`.bcsdf`) → a fit of the Chiang et al. 2016 far-field model
-//!   ([`chiang`]) and pbrt-v4, Mitsuba 3 and Blender Principled Hair parameters.
+//!   and Mitsuba 3, one file per engine.
+//! - [`fiber`]: fiber BCSDF tables (`.bcsdf`) → a fit of the Chiang et al. 2016 far-field model
+//!   ([`chiang`]) and pbrt-v4, Mitsuba 3 and Blender Principled Hair parameters, one file per
+//!   engine.
 //!
-//! Every conversion cites its source next to the formula.
+//! Exporters return the document and what to tell the user ([`Export`]); the command line
+//! (`cli/export.rs`) writes and prints. Every conversion cites its source next to the formula.
 
 pub mod burley;
 pub mod chiang;
-pub mod hair;
+pub mod fiber;
 pub mod skin;
+mod xml;
 
 use std::path::PathBuf;
 
-/// What `baker export` was asked: the table, the target, an optional entry (skin entry or
-/// fiber variant) and an optional output file (default: stdout).
+/// What `baker export` was asked: the table, the target and an optional entry (skin entry or
+/// fiber variant).
 #[derive(Debug, Clone)]
 pub struct ExportRequest {
     /// The baked table (`profiles.bkt` or a `.bcsdf`).
@@ -25,6 +28,19 @@ pub struct ExportRequest {
     pub to: String,
     /// Skin entry or fiber variant; `None` = every entry (skin) or the first variant (fiber).
     pub entry: Option<String>,
-    /// Output file; `None` = stdout.
-    pub output: Option<PathBuf>,
+}
+
+/// The result of an export: the document and the messages that go with it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Export {
+    /// The document, byte for byte what goes to the output file or stdout.
+    pub text: String,
+    /// The `--to` name of the target.
+    pub target: &'static str,
+    /// A line for stderr, printed before the document is written (fiber exports: the fit's
+    /// error and parameters).
+    pub summary: Option<String>,
+    /// What the document holds ("3 entries"), for the line printed after it was written to a
+    /// file: `baker export: {written} → FILE (TARGET)` (skin exports).
+    pub written: Option<String>,
 }

@@ -6,19 +6,20 @@
 //! Conventions (also in README "Fibers"): fiber axis +z; ωi points towards the light, ωo is
 //! the direction a photon leaves in; θ = asin(ω·z), φ = atan2(ω·y, ω·x). Lengths in µm.
 
-pub mod bake;
 pub mod dye;
 pub mod material;
 pub mod section;
+pub mod slices;
 pub mod surface;
 pub mod sweep;
 pub mod symmetry;
 pub mod tally;
 pub mod tracer;
 
+pub use formats::AngularGrid;
 pub use section::Section;
 pub use surface::Surface;
-pub use tally::{AngularGrid, Tally};
+pub use tally::DirectionTally;
 pub use tracer::{trace, Incident, TraceOptions, TraceResult};
 
 /// Wool's cuticle scales as a periodic variation along the axis (§5.3, "we approximate this

@@ -18,7 +18,7 @@
 //! [^heitz14b]: E. Heitz, E. d'Eon, "Importance sampling microfacet-based BSDFs using the
 //!     distribution of visible normals", EGSR 2014, §5 (V-cavity sampling).
 
-use crate::transport::boundary::fresnel;
+use crate::math::fresnel;
 
 /// Largest number of facet events inside one V-cavity before falling back to the mean
 /// surface (only reached at extreme grazing angles; counted in [`SurfaceStats`]).
@@ -160,7 +160,7 @@ pub fn g1_vcavity(w: [f64; 3], m: [f64; 3], n: [f64; 3]) -> f64 {
 #[inline]
 fn facet(d: [f64; 3], m: [f64; 3], n1: f64, n2: f64, u: f64) -> Scatter {
     let cos_i = -dot(d, m);
-    let (r, cos_t) = fresnel(n1, n2, cos_i);
+    let (r, cos_t) = fresnel::dielectric(n1, n2, cos_i);
     if u < r {
         Scatter {
             dir: axpy(2.0 * cos_i, m, d),
@@ -186,7 +186,7 @@ fn facet(d: [f64; 3], m: [f64; 3], n1: f64, n2: f64, u: f64) -> Scatter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::transport::rng::{batch_rng, uniform};
+    use crate::math::rng::{batch_rng, uniform};
     use rand_core::Rng;
 
     #[test]

@@ -1,75 +1,13 @@
-//! Binning of exiting photons over the outgoing sphere (§5.3.2: "collected in an infinite
-//! sphere bounding the fiber, as a function of ωo = ⟨φo, θo⟩").
-//!
-//! Conventions: fiber axis +z; θ = asin(ω·z) ∈ [−90°, 90°]; φ = atan2(ω·y, ω·x). Outgoing
-//! azimuths are stored relative to the incident one, Δφ = φo − φi wrapped to [−180°, 180°).
+//! Scores of exiting photons over the outgoing sphere (§5.3.2: "collected in an infinite
+//! sphere bounding the fiber, as a function of ωo = ⟨φo, θo⟩"), binned on an [`AngularGrid`]
+//! (its conventions: fiber axis +z; θ = asin(ω·z) ∈ [−90°, 90°]; φ = atan2(ω·y, ω·x); outgoing
+//! azimuths relative to the incident one, Δφ = φo − φi wrapped to [−180°, 180°)).
 
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
-
-/// Bins of θo × Δφ at a resolution that divides 180°.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct AngularGrid {
-    pub res_deg: f64,
-    pub n_theta: usize,
-    pub n_phi: usize,
-}
-
-impl AngularGrid {
-    /// `res_deg` must divide 180 into a whole number of bins (0.25°–30°).
-    pub fn new(res_deg: f64) -> Result<Self, String> {
-        let n = 180.0 / res_deg;
-        if !(0.25..=30.0).contains(&res_deg) || (n - n.round()).abs() > 1e-9 {
-            return Err(format!(
-                "resolution {res_deg}° must divide 180° into whole bins, within [0.25°, 30°]"
-            ));
-        }
-        let n = n.round() as usize;
-        Ok(Self {
-            res_deg,
-            n_theta: n,
-            n_phi: 2 * n,
-        })
-    }
-
-    pub fn bins(&self) -> usize {
-        self.n_theta * self.n_phi
-    }
-
-    /// Flat bin index (θ row-major) of direction `dir` leaving a fiber lit from `phi_i_rad`.
-    #[inline]
-    pub fn bin(&self, dir: [f64; 3], phi_i_rad: f64) -> u32 {
-        let res = self.res_deg.to_radians();
-        let theta = dir[2].clamp(-1.0, 1.0).asin();
-        let it = (((theta + FRAC_PI_2) / res) as usize).min(self.n_theta - 1);
-        let mut dphi = dir[1].atan2(dir[0]) - phi_i_rad;
-        dphi -= TAU * ((dphi + PI) / TAU).floor();
-        let ip = (((dphi + PI) / res) as usize).min(self.n_phi - 1);
-        (it * self.n_phi + ip) as u32
-    }
-
-    pub fn theta_edges_deg(&self) -> Vec<f64> {
-        (0..=self.n_theta)
-            .map(|i| -90.0 + i as f64 * self.res_deg)
-            .collect()
-    }
-
-    pub fn dphi_edges_deg(&self) -> Vec<f64> {
-        (0..=self.n_phi)
-            .map(|i| -180.0 + i as f64 * self.res_deg)
-            .collect()
-    }
-
-    /// Solid angle of θ row `it` (one Δφ bin), sr.
-    pub fn solid_angle(&self, it: usize) -> f64 {
-        let r = self.res_deg.to_radians();
-        let t0 = -FRAC_PI_2 + it as f64 * r;
-        r * ((t0 + r).sin() - t0.sin())
-    }
-}
+use formats::AngularGrid;
 
 /// Σw and Σw² per bin for each absorption coefficient of a trace, plus photon counts.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Tally {
+pub struct DirectionTally {
     pub grid: AngularGrid,
     /// The absorption coefficients scored, per µm.
     pub mua_per_um: Vec<f64>,
@@ -89,7 +27,7 @@ pub struct Tally {
     pub path_sum2_um2: f64,
 }
 
-impl Tally {
+impl DirectionTally {
     pub fn new(grid: AngularGrid, mua_per_um: &[f64]) -> Self {
         let k = mua_per_um.len();
         Self {
@@ -126,7 +64,7 @@ impl Tally {
     }
 
     /// Adds another tally (same grid and μa list) in place.
-    pub fn merge(&mut self, o: &Tally) {
+    pub fn merge(&mut self, o: &DirectionTally) {
         for k in 0..self.sum.len() {
             for (a, b) in self.sum[k].iter_mut().zip(&o.sum[k]) {
                 *a += b;
@@ -181,25 +119,5 @@ impl Tally {
     pub fn mean_path_um(&self) -> f64 {
         let n = (self.intercepted - self.lost).max(1) as f64;
         self.path_sum_um / n
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bins_follow_the_conventions() {
-        let g = AngularGrid::new(2.0).unwrap();
-        assert_eq!((g.n_theta, g.n_phi), (90, 180));
-        // Straight back towards the light (Δφ = 0) at θ = 0: θ row 45, Δφ column 90.
-        let b = g.bin([1.0, 0.0, 0.0], 0.0);
-        assert_eq!(b as usize, 45 * 180 + 90);
-        // Forward (Δφ = ±180° wraps to −180°): column 0.
-        let b = g.bin([-1.0, 0.0, 0.0], 0.0);
-        assert_eq!(b as usize % 180, 0);
-        assert!(AngularGrid::new(7.0).is_err());
-        let total: f64 = (0..g.n_theta).map(|i| g.solid_angle(i)).sum::<f64>() * g.n_phi as f64;
-        assert!((total - 4.0 * PI).abs() < 1e-9);
     }
 }

@@ -9,19 +9,19 @@
 //! section along z; within one scale the ray's image in section coordinates (x/s, y/s) is
 //! again a straight segment (a projective map of a line), so the same 2D query serves.
 //!
-//! Absorption is applied afterwards from the recorded path length ([`super::Tally::score`]):
+//! Absorption is applied afterwards from the recorded path length ([`super::DirectionTally::score`]):
 //! the walk of a photon does not depend on μa, so one trace serves every dye, depth of shade
 //! and wavelength (Beer–Lambert weights exp(−μa·ℓ)).
 
 use std::time::Instant;
 
-use indicatif::ProgressBar;
 use rand_core::Rng;
 use rayon::prelude::*;
 
-use super::tally::{AngularGrid, Tally};
+use super::tally::DirectionTally;
 use super::{Fiber, Section, Surface};
-use crate::transport::rng::{batch_rng, uniform, BatchRng};
+use crate::math::rng::{batch_rng, uniform, BatchRng};
+use formats::AngularGrid;
 
 /// Photons per batch: one RNG stream and one partial tally each.
 pub const BATCH: u64 = 1 << 15;
@@ -69,13 +69,14 @@ pub struct TraceOptions {
     pub grid: AngularGrid,
     /// Absorption coefficients to score from the one trace, per µm.
     pub mua_per_um: Vec<f64>,
-    pub bar: Option<ProgressBar>,
+    /// Where finished photons are reported.
+    pub progress: crate::progress::Reporter,
 }
 
 /// A finished trace.
 #[derive(Debug, Clone)]
 pub struct TraceResult {
-    pub tally: Tally,
+    pub tally: DirectionTally,
     pub incident: Incident,
     /// A(ωi): exact projected width per unit length from the outline, µm.
     pub projected_width_um: f64,
@@ -477,18 +478,16 @@ pub fn trace(fiber: &Fiber, inc: Incident, o: &TraceOptions) -> TraceResult {
     let start = Instant::now();
     let setup = Setup::new(fiber, inc);
     let n_batches = o.photons.div_ceil(BATCH);
-    let mut total = Tally::new(o.grid, &o.mua_per_um);
+    let mut total = DirectionTally::new(o.grid, &o.mua_per_um);
     let mut b0 = 0;
     while b0 < n_batches {
         let b1 = (b0 + GROUP).min(n_batches);
-        let parts: Vec<Tally> = (b0..b1)
+        let parts: Vec<DirectionTally> = (b0..b1)
             .into_par_iter()
             .map(|b| {
                 let n = BATCH.min(o.photons - b * BATCH);
                 let t = trace_batch(&setup, inc, o, b, n);
-                if let Some(bar) = &o.bar {
-                    bar.inc(n);
-                }
+                crate::progress::advance(&o.progress, n);
                 t
             })
             .collect();
@@ -506,9 +505,15 @@ pub fn trace(fiber: &Fiber, inc: Incident, o: &TraceOptions) -> TraceResult {
     }
 }
 
-fn trace_batch(setup: &Setup, inc: Incident, o: &TraceOptions, batch: u64, n: u64) -> Tally {
+fn trace_batch(
+    setup: &Setup,
+    inc: Incident,
+    o: &TraceOptions,
+    batch: u64,
+    n: u64,
+) -> DirectionTally {
     let mut rng = batch_rng(o.seed, batch);
-    let mut t = Tally::new(o.grid, &o.mua_per_um);
+    let mut t = DirectionTally::new(o.grid, &o.mua_per_um);
     t.launched = n;
     let grid = o.grid;
     for _ in 0..n {

@@ -25,7 +25,7 @@ pub fn gaussian_energy(v_mm2: f64, a_mm: f64, b_mm: f64) -> f64 {
 }
 
 #[derive(Debug, Clone, PartialEq)]
-pub struct FitOptions {
+pub struct GaussianFitOptions {
     /// Number of Gaussians (6 in real-time renderers).
     pub count: usize,
     /// Nelder–Mead evaluations per restart.
@@ -36,7 +36,7 @@ pub struct FitOptions {
     pub cancel: Cancel,
 }
 
-impl Default for FitOptions {
+impl Default for GaussianFitOptions {
     fn default() -> Self {
         Self {
             count: 6,
@@ -185,7 +185,7 @@ fn nelder_mead(
 }
 
 /// Phase 1 on the smooth least-squares surrogate, phase 2 on the L1 error itself, from `x0`.
-fn optimise(p: &Problem, x0: &[f64], o: &FitOptions) -> Result<(Vec<f64>, f64), Cancelled> {
+fn optimise(p: &Problem, x0: &[f64], o: &GaussianFitOptions) -> Result<(Vec<f64>, f64), Cancelled> {
     let f2 = |x: &[f64]| p.evaluate_l2(x);
     let (mut x, _) = nelder_mead(&f2, x0, 0.7, o.max_evaluations);
     for _ in 0..o.restarts {
@@ -217,7 +217,7 @@ pub fn fit_sum_of_gaussians(
     edges_mm: &[f64],
     table: &[[f64; 3]],
     r99_mm: [f64; 3],
-    o: &FitOptions,
+    o: &GaussianFitOptions,
 ) -> Result<GaussianFit, Cancelled> {
     assert_eq!(edges_mm.len(), table.len() + 1, "one more edge than bins");
     assert!(o.count >= 1);
@@ -350,7 +350,7 @@ mod tests {
             bins.edges_mm(),
             &table,
             [12.0, 3.0, 2.0],
-            &FitOptions::default(),
+            &GaussianFitOptions::default(),
         )
         .unwrap();
         for c in 0..3 {
@@ -380,14 +380,14 @@ mod tests {
         let w = [[0.2, 0.3, 0.4], [0.3, 0.2, 0.1], [0.1, 0.02, 0.0]];
         let bins = RadialBins::fine_then_log(0.01, 1.06, 15.0);
         let table = table_of(bins.edges_mm(), &v, &w);
-        let o = FitOptions::default();
+        let o = GaussianFitOptions::default();
         let a = fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &o).unwrap();
         let b = fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &o).unwrap();
         assert_eq!(a, b);
         // A set flag stops the fit.
         let (flag, cancel) = Cancel::fresh();
         flag.store(true, std::sync::atomic::Ordering::Relaxed);
-        let stopped = FitOptions { cancel, ..o };
+        let stopped = GaussianFitOptions { cancel, ..o };
         assert_eq!(
             fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0, 4.0, 2.0], &stopped),
             Err(Cancelled)

@@ -4,5 +4,5 @@ pub mod gaussians;
 pub mod nnls;
 pub mod simplex;
 
-pub use gaussians::{fit_sum_of_gaussians, gaussian_energy, FitOptions, GaussianFit};
+pub use gaussians::{fit_sum_of_gaussians, gaussian_energy, GaussianFit, GaussianFitOptions};
 pub use simplex::nelder_mead;

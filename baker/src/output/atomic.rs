@@ -17,7 +17,7 @@ use std::path::Path;
 
 /// Where the bytes of an output go.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Target {
+pub enum Sink {
     /// A regular file or a new path: temp-and-rename.
     File,
     /// `-`.
@@ -29,23 +29,23 @@ pub enum Target {
 }
 
 /// What writing to `path` will do; an error for a directory or a block device.
-pub fn target(path: &Path) -> io::Result<Target> {
+pub fn target(path: &Path) -> io::Result<Sink> {
     use std::os::unix::fs::FileTypeExt as _;
     if path.as_os_str() == "-" {
-        return Ok(Target::Stdout);
+        return Ok(Sink::Stdout);
     }
     let meta = match fs::metadata(path) {
         Ok(m) => m,
-        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Target::File),
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Sink::File),
         Err(e) => return Err(e),
     };
     let ft = meta.file_type();
     if ft.is_file() {
-        Ok(Target::File)
+        Ok(Sink::File)
     } else if ft.is_char_device() || ft.is_fifo() {
-        Ok(Target::Stream)
+        Ok(Sink::Stream)
     } else if ft.is_socket() {
-        Ok(Target::Socket)
+        Ok(Sink::Socket)
     } else {
         let what = crate::files::special_kind(&ft).unwrap_or("not a regular file");
         Err(io::Error::other(format!(
@@ -61,12 +61,12 @@ const FIFO_READER_WAIT: std::time::Duration = std::time::Duration::from_secs(5);
 
 /// Opens a stream target for writing. A FIFO nobody reads is an error after
 /// [`FIFO_READER_WAIT`] (a plain `open` would wait forever).
-fn open_stream(path: &Path, t: Target) -> io::Result<Box<dyn Write>> {
+fn open_stream(path: &Path, t: Sink) -> io::Result<Box<dyn Write>> {
     use std::os::unix::fs::OpenOptionsExt as _;
     use std::os::unix::io::AsRawFd as _;
     Ok(match t {
-        Target::Stdout => Box::new(io::stdout().lock()),
-        Target::Socket => Box::new(std::os::unix::net::UnixStream::connect(path)?),
+        Sink::Stdout => Box::new(io::stdout().lock()),
+        Sink::Socket => Box::new(std::os::unix::net::UnixStream::connect(path)?),
         _ => {
             let t0 = std::time::Instant::now();
             let f = loop {
@@ -97,7 +97,7 @@ fn open_stream(path: &Path, t: Target) -> io::Result<Box<dyn Write>> {
 /// Writes `bytes` to `path` ([module docs](self)): atomically for files.
 pub fn write(path: &Path, bytes: &[u8]) -> io::Result<()> {
     match target(path)? {
-        Target::File => write_with(path, |tmp| {
+        Sink::File => write_with(path, |tmp| {
             let mut f = File::create(tmp)?;
             f.write_all(bytes)
         }),
@@ -118,7 +118,7 @@ pub fn write_with<E: From<io::Error>>(
     fill: impl FnOnce(&Path) -> Result<(), E>,
 ) -> Result<(), E> {
     let t = target(path)?;
-    if t != Target::File {
+    if t != Sink::File {
         let tmp = tempfile::Builder::new().prefix(".baker-").tempfile()?;
         fill(tmp.path())?;
         let mut w = open_stream(path, t)?;
@@ -142,7 +142,7 @@ pub fn write_with<E: From<io::Error>>(
     let result = fill(&tmp).and_then(|()| {
         File::open(&tmp)?.sync_all()?;
         // The target may have become something else while `fill` ran.
-        if target(path)? != Target::File {
+        if target(path)? != Sink::File {
             return Err(io::Error::other(format!(
                 "{} changed into a special file while it was being written",
                 crate::files::Shown(path)

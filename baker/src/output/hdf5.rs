@@ -145,3 +145,60 @@ fn write_to(path: &Path, t: &Tables) -> anyhow::Result<()> {
     f.close()?;
     Ok(())
 }
+
+/// A new HDF5 file at `path` that records no times (equal contents give equal bytes).
+pub fn create_file(path: &Path) -> anyhow::Result<h5::File> {
+    Ok(h5::File::with_options()
+        .with_fcpl(|p| p.obj_track_times(false))
+        .create(path)?)
+}
+
+/// A new group `name` of `file`, recording no times.
+pub fn group(file: &h5::File, name: &str) -> anyhow::Result<h5::Group> {
+    Ok(file
+        .create_group_builder()
+        .obj_track_times(false)
+        .create(name)?)
+}
+
+/// A dataset of `shape` in chunks of `chunk`, shuffled and deflated (level 4), recording no
+/// times; written slice by slice.
+pub fn chunked<T: h5::H5Type>(
+    g: &h5::Group,
+    name: &str,
+    shape: &[usize],
+    chunk: &[usize],
+) -> anyhow::Result<h5::Dataset> {
+    Ok(g.new_dataset::<T>()
+        .obj_track_times(false)
+        .shape(shape)
+        .chunk(chunk)
+        .shuffle()
+        .deflate(4)
+        .create(name)?)
+}
+
+/// A contiguous dataset of `shape` holding `data`, recording no times.
+pub fn array<T: h5::H5Type>(
+    g: &h5::Group,
+    name: &str,
+    shape: &[usize],
+    data: &[T],
+) -> anyhow::Result<h5::Dataset> {
+    let d = g
+        .new_dataset::<T>()
+        .obj_track_times(false)
+        .shape(shape)
+        .create(name)?;
+    d.write_raw(data)?;
+    Ok(d)
+}
+
+/// A 1-D dataset of variable-length strings.
+pub fn strings(g: &h5::Group, name: &str, values: &[String]) -> anyhow::Result<h5::Dataset> {
+    let v: Vec<VarLenUnicode> = values
+        .iter()
+        .map(|s| VarLenUnicode::from_str(s).map_err(|e| anyhow::anyhow!("{name}: {e}")))
+        .collect::<anyhow::Result<_>>()?;
+    array(g, name, &[values.len()], &v)
+}

@@ -5,7 +5,6 @@ use std::path::Path;
 
 use anyhow::Context;
 use serde::Serialize;
-use sha2::{Digest, Sha256};
 
 #[derive(Debug, Serialize)]
 pub struct ManifestFile {
@@ -20,11 +19,10 @@ pub struct ManifestFile {
 pub fn file_entry(dir: &Path, rel: &str, description: &str) -> anyhow::Result<ManifestFile> {
     let p = dir.join(rel);
     let bytes = std::fs::read(&p).with_context(|| format!("reading {}", p.display()))?;
-    let digest = Sha256::digest(&bytes);
     Ok(ManifestFile {
         path: rel.to_string(),
         bytes: bytes.len() as u64,
-        sha256: digest.iter().map(|b| format!("{b:02x}")).collect(),
+        sha256: crate::files::sha256_hex(&bytes),
         description: description.to_string(),
     })
 }

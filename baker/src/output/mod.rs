@@ -11,9 +11,8 @@ pub mod manifest;
 pub mod mci;
 pub mod paths;
 pub mod plot;
-pub mod preview;
 pub mod slice;
 pub mod tables;
 
-/// The file in a spec's output folder that records what produced it (`cli::pipeline::stamp`).
+/// The file in a spec's output folder that records what produced it (`bake::stamp`).
 pub const STAMP_FILE: &str = ".baked";

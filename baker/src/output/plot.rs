@@ -117,3 +117,24 @@ pub(crate) fn write_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> anyhow::Re
     crate::output::atomic::write(path, &png)?;
     Ok(())
 }
+
+/// `<entry>_mua.png` and `<entry>_musp.png` of every entry into `dir`; returns their paths.
+pub fn optics_plots(
+    dir: &Path,
+    lambda_nm: &[f64],
+    entries: &[OpticsEntry],
+) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    use anyhow::Context as _;
+    let mut written = Vec::new();
+    for e in entries {
+        for (q, suffix) in [
+            (Quantity::Absorption, "mua"),
+            (Quantity::ReducedScattering, "musp"),
+        ] {
+            let p = dir.join(format!("{}_{suffix}.png", e.name));
+            plot(&p, lambda_nm, e, q).with_context(|| format!("plotting {}", p.display()))?;
+            written.push(p);
+        }
+    }
+    Ok(written)
+}

@@ -5,8 +5,6 @@
 
 use std::path::Path;
 
-use crate::fiber::AngularGrid;
-
 /// Matplotlib's "inferno" colour map, sampled at nine stops (van der Walt & Smith, 2015).
 const INFERNO: [[f64; 3]; 9] = [
     [0.0, 0.0, 4.0],
@@ -34,22 +32,23 @@ fn colour(t: f64) -> [u8; 3] {
 /// Decades of dynamic range shown.
 pub const DECADES: f64 = 5.0;
 
-/// Writes `hist2d` (fractions per bin, θ row-major as in [`crate::fiber::Tally`]) to `path`,
-/// `px` pixels per bin, with a colour bar along the bottom.
+/// The false colour of `v` on a log scale [`DECADES`] deep below `vmax`; black for 0.
+fn log_colour(v: f64, vmax: f64) -> [u8; 3] {
+    if v > 0.0 && vmax > 0.0 {
+        colour(1.0 + (v / vmax).log10() / DECADES)
+    } else {
+        [0, 0, 0]
+    }
+}
+
+/// Writes `value` (a density per bin, θ row-major, `nt × np`, θ increasing upwards) to
+/// `path`, `px` pixels per bin, with a colour bar along the bottom.
 pub fn write_slice_png(
     path: &Path,
-    grid: &AngularGrid,
-    hist2d: &[f64],
+    (nt, np): (usize, usize),
+    value: &[f64],
     px: u32,
 ) -> anyhow::Result<()> {
-    let (nt, np) = (grid.n_theta, grid.n_phi);
-    let value: Vec<f64> = (0..nt * np)
-        .map(|b| {
-            let it = b / np;
-            let t_mid = (-90.0 + (it as f64 + 0.5) * grid.res_deg).to_radians();
-            hist2d[b] / (grid.solid_angle(it) * t_mid.cos().max(1e-6))
-        })
-        .collect();
     let vmax = value.iter().copied().fold(0.0, f64::max);
     let (w, h_map) = (np as u32 * px, nt as u32 * px);
     let bar = 16u32;
@@ -58,12 +57,7 @@ pub fn write_slice_png(
     for y in 0..h_map {
         let it = nt - 1 - (y / px) as usize;
         for x in 0..w {
-            let v = value[it * np + (x / px) as usize];
-            let c = if v > 0.0 && vmax > 0.0 {
-                colour(1.0 + (v / vmax).log10() / DECADES)
-            } else {
-                [0, 0, 0]
-            };
+            let c = log_colour(value[it * np + (x / px) as usize], vmax);
             let o = ((y * w + x) * 3) as usize;
             buf[o..o + 3].copy_from_slice(&c);
         }
@@ -102,12 +96,7 @@ pub fn write_panels_png(
         for y in 0..ph {
             let it = n_theta - 1 - (y / px) as usize;
             for x in 0..pw {
-                let v = p[it * n_phi + (x / px) as usize];
-                let col = if v > 0.0 && vmax > 0.0 {
-                    colour(1.0 + (v / vmax).log10() / DECADES)
-                } else {
-                    [0, 0, 0]
-                };
+                let col = log_colour(p[it * n_phi + (x / px) as usize], vmax);
                 let (gx, gy) = (c * (pw + gap) + x, r * (ph + gap) + y);
                 let o = ((gy * w + gx) * 3) as usize;
                 buf[o..o + 3].copy_from_slice(&col);

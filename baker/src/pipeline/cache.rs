@@ -131,7 +131,7 @@ mod tests {
     fn round_trip_and_damage_is_a_miss() {
         let dir = tempfile::tempdir().unwrap();
         let c = Cache::new(dir.path(), CacheMode::Use);
-        let k = super::super::KeyBuilder::new("test")
+        let k = super::super::KeyBuilder::new("test", &[0; 32])
             .part("x", &1.5f64)
             .finish();
         let v = vec![1.0f64, -0.0, f64::MIN_POSITIVE, 3.25];
@@ -151,7 +151,7 @@ mod tests {
             assert!(decode::<Vec<f64>>(&b, &k).is_none(), "byte {i}");
         }
         assert!(decode::<Vec<f64>>(&good[..good.len() - 3], &k).is_none());
-        let other = super::super::KeyBuilder::new("test")
+        let other = super::super::KeyBuilder::new("test", &[0; 32])
             .part("x", &2.0f64)
             .finish();
         assert!(decode::<Vec<f64>>(&good, &other).is_none());

@@ -23,7 +23,7 @@ use std::fmt;
 use sha2::{Digest, Sha256};
 
 pub use cache::{Cache, CacheMode};
-pub use events::{Events, ProgressMode};
+pub use events::{Bar, Events, Observer};
 
 /// Bumped whenever a change to the transport or the bake's unit definitions would change a
 /// unit's result for the same inputs: old cache entries then stop matching.
@@ -62,14 +62,15 @@ impl fmt::Debug for Key {
 pub struct KeyBuilder(Sha256);
 
 impl KeyBuilder {
-    /// A key of `kind` (e.g. `skin-run`), with the engine version and the data checksums.
-    pub fn new(kind: &str) -> KeyBuilder {
+    /// A key of `kind` (e.g. `skin-run`), with the engine version and `data`, the checksum of
+    /// the data tables the result depends on ([`crate::data::checksum`] in a bake).
+    pub fn new(kind: &str, data: &[u8; 32]) -> KeyBuilder {
         let mut h = Sha256::new();
         h.update(b"baker-unit\0");
         h.update(ENGINE_VERSION.to_le_bytes());
         h.update(env!("CARGO_PKG_VERSION").as_bytes());
         h.update([0]);
-        h.update(data_checksum());
+        h.update(data);
         h.update(kind.as_bytes());
         h.update([0]);
         KeyBuilder(h)
@@ -100,25 +101,6 @@ impl KeyBuilder {
 /// SHA-256 of the `Debug` rendering of a value (a part digested once, used by many keys).
 pub fn digest_of(value: &impl fmt::Debug) -> [u8; 32] {
     Sha256::digest(format!("{value:?}").as_bytes()).into()
-}
-
-/// SHA-256 over the measured data tables compiled into the binary (spectra, CIE tables, dye
-/// presets): a changed data file changes every key.
-fn data_checksum() -> [u8; 32] {
-    static SUM: std::sync::OnceLock<[u8; 32]> = std::sync::OnceLock::new();
-    *SUM.get_or_init(|| {
-        let mut h = Sha256::new();
-        for (name, text) in crate::spectral::DATA_FILES
-            .iter()
-            .chain(crate::fiber::dye::DATA_FILES)
-        {
-            h.update(name.as_bytes());
-            h.update([0]);
-            h.update(text.as_bytes());
-            h.update([0]);
-        }
-        h.finalize().into()
-    })
 }
 
 /// `--shard I/N`: this process bakes units whose index ≡ I − 1 (mod N).

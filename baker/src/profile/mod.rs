@@ -10,5 +10,6 @@ pub mod simulate;
 
 pub use rgb::{rgb_profile, RgbProfile};
 pub use simulate::{
-    plan, simulate, simulate_units, skin_units, Plan, SimOptions, SkinUnits, SpectralProfile,
+    plan, simulate, simulate_units, skin_units, GroupPlan, SimOptions, SkinSimulation, SkinUnits,
+    SpectralProfile,
 };

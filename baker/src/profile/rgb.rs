@@ -2,7 +2,7 @@
 
 use super::simulate::SpectralProfile;
 use crate::cancel::{Cancel, Cancelled};
-use crate::fit::{fit_sum_of_gaussians, FitOptions, GaussianFit};
+use crate::fit::{fit_sum_of_gaussians, GaussianFit, GaussianFitOptions};
 use crate::spectral::ColourMap;
 
 /// What a renderer loads for one entry.
@@ -68,10 +68,10 @@ pub fn rgb_profile(
         &p.r_edges_mm,
         &rd_rgb,
         r_fit,
-        &FitOptions {
+        &GaussianFitOptions {
             count: gaussians,
             cancel,
-            ..FitOptions::default()
+            ..GaussianFitOptions::default()
         },
     )?;
     Ok(RgbProfile {

@@ -11,8 +11,9 @@ use anyhow::Context as _;
 
 use formats::OpticsEntry;
 
-use crate::pipeline::{Cache, CacheMode, Events, Key, KeyBuilder, ProgressMode, Runner};
-use crate::transport::white::WhiteSets;
+use crate::math::rng::{digest_words, group_wavelength_seed};
+use crate::pipeline::{Cache, CacheMode, Events, Key, KeyBuilder, Runner};
+use crate::transport::white::{SetTally, WhiteSets};
 use crate::transport::{self, run_white_sets, McOptions, RadialBins, Stack};
 
 /// Spectral profile of one entry: per wavelength, Rd(r) per unit area on the radial bins and
@@ -41,7 +42,7 @@ pub struct SpectralProfile {
 
 /// Which entries share a simulation.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Plan {
+pub struct GroupPlan {
     /// Entry indices per group, in entry order; groups in order of their first entry.
     pub groups: Vec<Vec<usize>>,
     /// Per group, a 64-bit digest of its scattering stacks (seeds derive from it).
@@ -57,20 +58,8 @@ pub struct SimOptions {
     /// blue) get up to this many times `photons`, so that every wavelength of a group costs
     /// about the same as its most expensive one. 1 turns it off.
     pub max_boost: u64,
-    pub bar: Option<indicatif::ProgressBar>,
-}
-
-/// SplitMix64 finaliser (Steele, Lea & Flood 2014): a well-mixed 64-bit digest step.
-fn mix(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-fn digest(words: &[u64]) -> u64 {
-    words
-        .iter()
-        .fold(0x9e37_79b9_7f4a_7c15, |h, &w| mix(h ^ mix(w)))
+    /// Where finished photon packets are reported.
+    pub progress: crate::progress::Reporter,
 }
 
 /// Everything of entry `e`'s stacks except absorption, as bits: equal keys ⇔ the same
@@ -105,13 +94,13 @@ fn scattering_key(e: &OpticsEntry, n_lambda: usize) -> Vec<u64> {
 }
 
 /// Groups `entries` by shared scattering (or one group each without `reuse`).
-pub fn plan(entries: &[OpticsEntry], n_lambda: usize, reuse: bool) -> Plan {
+pub fn plan(entries: &[OpticsEntry], n_lambda: usize, reuse: bool) -> GroupPlan {
     let mut index: HashMap<Vec<u64>, usize> = HashMap::new();
     let mut groups: Vec<Vec<usize>> = Vec::new();
     let mut digests = Vec::new();
     for (i, e) in entries.iter().enumerate() {
         let key = scattering_key(e, n_lambda);
-        let d = digest(&key);
+        let d = digest_words(&key);
         let g = if reuse {
             *index.entry(key).or_insert_with(|| {
                 groups.push(Vec::new());
@@ -121,12 +110,12 @@ pub fn plan(entries: &[OpticsEntry], n_lambda: usize, reuse: bool) -> Plan {
         } else {
             groups.push(Vec::new());
             // Without sharing, an entry's own absorption is part of what it simulates.
-            digests.push(digest(&[d, digest(&absorption_bits(e))]));
+            digests.push(digest_words(&[d, digest_words(&absorption_bits(e))]));
             groups.len() - 1
         };
         groups[g].push(i);
     }
-    Plan { groups, digests }
+    GroupPlan { groups, digests }
 }
 
 fn absorption_bits(e: &OpticsEntry) -> Vec<u64> {
@@ -136,28 +125,25 @@ fn absorption_bits(e: &OpticsEntry) -> Vec<u64> {
         .collect()
 }
 
-/// Seed of the simulation of group digest `d` at wavelength index `i`: depends on the spec
-/// seed and what is simulated, not on which other entries are in the bake.
-pub fn task_seed(seed: u64, d: u64, i: usize) -> u64 {
-    digest(&[seed, d, i as u64])
-}
-
 /// Runs every group of `plan` at every wavelength; `on_task(done, total, seconds)` after each.
 /// No cache (see [`simulate_units`] for the bake's cached, shardable version).
 pub fn simulate(
     entries: &[OpticsEntry],
     lambda_nm: &[f64],
     bins: &RadialBins,
-    plan: &Plan,
+    plan: &GroupPlan,
     o: &SimOptions,
     on_task: impl FnMut(usize, usize, f64),
 ) -> anyhow::Result<Vec<SpectralProfile>> {
-    let runner = Runner::new(
-        Cache::new("", CacheMode::Off),
-        Events::new(ProgressMode::None),
-        None,
-    );
-    let out = simulate_units(entries, lambda_nm, bins, plan, o, &runner, "", on_task)?;
+    let runner = Runner::new(Cache::new("", CacheMode::Off), Events::silent(), None);
+    let sim = SkinSimulation {
+        entries,
+        lambda_nm,
+        bins,
+        plan,
+        o,
+    };
+    let out = simulate_units(&sim, &runner, "", on_task)?;
     Ok(out.expect("without a shard every unit is computed"))
 }
 
@@ -172,7 +158,7 @@ pub struct SkinUnits {
 
 fn stack_and_sets(
     entries: &[OpticsEntry],
-    plan: &Plan,
+    plan: &GroupPlan,
     g: usize,
     i: usize,
 ) -> (Stack, Vec<Vec<f64>>) {
@@ -190,7 +176,7 @@ pub fn skin_units(
     entries: &[OpticsEntry],
     lambda_nm: &[f64],
     bins: &RadialBins,
-    plan: &Plan,
+    plan: &GroupPlan,
     o: &SimOptions,
 ) -> SkinUnits {
     let nl = lambda_nm.len();
@@ -207,11 +193,14 @@ pub fn skin_units(
         if o.max_boost > 1 {
             for (i, (stack, sets)) in inputs.iter().enumerate() {
                 pk.push(
-                    KeyBuilder::new("skin-pilot")
+                    KeyBuilder::new("skin-pilot", crate::data::checksum())
                         .part("stack", stack)
                         .part("sets", sets)
                         .part("photons", &pilot_photons)
-                        .part("seed", &task_seed(o.seed ^ PILOT_TAG, plan.digests[g], i))
+                        .part(
+                            "seed",
+                            &group_wavelength_seed(o.seed ^ PILOT_TAG, plan.digests[g], i),
+                        )
                         .part("batch", &batch)
                         .part("random_entry", &true)
                         .finish(),
@@ -221,14 +210,14 @@ pub fn skin_units(
         let pilots = crate::pipeline::digest_of(&pk);
         for (i, (stack, sets)) in inputs.iter().enumerate() {
             rk.push(
-                KeyBuilder::new("skin-run")
+                KeyBuilder::new("skin-run", crate::data::checksum())
                     .part("stack", stack)
                     .part("sets", sets)
                     .part("r_edges_mm", &bins.edges_mm())
                     .part("photons", &o.photons)
                     .part("max_boost", &o.max_boost)
                     .digest("pilots", &pilots)
-                    .part("seed", &task_seed(o.seed, plan.digests[g], i))
+                    .part("seed", &group_wavelength_seed(o.seed, plan.digests[g], i))
                     .part("batch", &batch)
                     .part("random_entry", &true)
                     .finish(),
@@ -249,39 +238,38 @@ pub fn unit_id(prefix: &str, kind: &str, g: usize, lambda_nm: f64) -> String {
     format!("{prefix}/{kind}group{g}/{lambda_nm}nm")
 }
 
+/// What a skin simulation runs: the entries' optics at every wavelength of `lambda_nm`, the
+/// radial bins Rd(r) is scored on, the plan of shared simulations and the options.
+#[derive(Clone, Copy)]
+pub struct SkinSimulation<'a> {
+    pub entries: &'a [OpticsEntry],
+    pub lambda_nm: &'a [f64],
+    pub bins: &'a RadialBins,
+    pub plan: &'a GroupPlan,
+    pub o: &'a SimOptions,
+}
+
 /// [`simulate`] through a [`Runner`]: cached units are read, owned units computed and cached,
 /// units of other shards skipped. `Ok(None)` when some units belong to other shards.
-#[allow(clippy::too_many_arguments)]
 pub fn simulate_units(
-    entries: &[OpticsEntry],
-    lambda_nm: &[f64],
-    bins: &RadialBins,
-    plan: &Plan,
-    o: &SimOptions,
+    sim: &SkinSimulation<'_>,
     runner: &Runner,
     prefix: &str,
     mut on_task: impl FnMut(usize, usize, f64),
 ) -> anyhow::Result<Option<Vec<SpectralProfile>>> {
+    let SkinSimulation {
+        entries,
+        lambda_nm,
+        bins,
+        plan,
+        o,
+    } = *sim;
     let nl = lambda_nm.len();
-    let nr = bins.len();
     let areas = bins.areas_mm2();
     let units = skin_units(entries, lambda_nm, bins, plan, o);
     let mut out: Vec<SpectralProfile> = entries
         .iter()
-        .map(|_| SpectralProfile {
-            lambda_nm: lambda_nm.to_vec(),
-            r_edges_mm: bins.edges_mm().to_vec(),
-            rd_per_mm2: vec![vec![0.0; nr]; nl],
-            rd_per_mm2_se: vec![vec![0.0; nr]; nl],
-            rd_total: vec![0.0; nl],
-            rd_total_se: vec![0.0; nl],
-            rd_unscattered: vec![0.0; nl],
-            tt: vec![0.0; nl],
-            tt_se: vec![0.0; nl],
-            rsp: vec![0.0; nl],
-            photons: vec![0; nl],
-            group: 0,
-        })
+        .map(|_| empty_profile(lambda_nm, bins))
         .collect();
     let total = plan.groups.len() * nl;
     let mut done = 0;
@@ -298,16 +286,15 @@ pub fn simulate_units(
                 && runner.owns(Some(index))
                 && !runner.require_cached;
             if needs_compute && photons.is_none() {
-                photons = Some(photon_counts(
-                    entries, lambda_nm, plan, o, &units, runner, prefix, g,
-                )?);
+                photons = Some(photon_counts(sim, &units, runner, prefix, g)?);
             }
             let n_main = photons.as_ref().map_or(o.photons, |p| p[i]);
             let run = runner.unit(&id, key, Some(index), n_main, || {
                 let (stack, sets) = stack_and_sets(entries, plan, g, i);
-                let mut mo = McOptions::new(n_main, task_seed(o.seed, plan.digests[g], i));
+                let mut mo =
+                    McOptions::new(n_main, group_wavelength_seed(o.seed, plan.digests[g], i));
                 mo.threads = o.threads;
-                mo.bar = o.bar.clone();
+                mo.progress = o.progress.clone();
                 mo.cancel = runner.cancel;
                 // The profile a renderer applies everywhere: averaged over where the beam
                 // meets the junction's papillae (profile/DECISIONS.md, row 1).
@@ -321,21 +308,8 @@ pub fn simulate_units(
                 complete = false;
                 continue;
             };
-            let n = run.photons;
             for (&m, t) in members.iter().zip(&run.sets) {
-                let p = &mut out[m];
-                p.group = g;
-                p.photons[i] = n;
-                p.rsp[i] = run.rsp;
-                p.rd_total[i] = t.rd.mean(n);
-                p.rd_total_se[i] = t.rd.se(n);
-                p.rd_unscattered[i] = t.rd_unscattered.mean(n);
-                p.tt[i] = t.tt.mean(n);
-                p.tt_se[i] = t.tt.se(n);
-                for k in 0..nr {
-                    p.rd_per_mm2[i][k] = t.rd_r[k].mean(n) / areas[k];
-                    p.rd_per_mm2_se[i][k] = t.rd_r[k].se(n) / areas[k];
-                }
+                store_run(&mut out[m], g, i, &run, t, &areas);
             }
             on_task(done, total, t0.elapsed().as_secs_f64());
         }
@@ -343,22 +317,69 @@ pub fn simulate_units(
     Ok(complete.then_some(out))
 }
 
+/// A profile on `bins` at every wavelength of `lambda_nm`, all zero.
+fn empty_profile(lambda_nm: &[f64], bins: &RadialBins) -> SpectralProfile {
+    let (nl, nr) = (lambda_nm.len(), bins.len());
+    SpectralProfile {
+        lambda_nm: lambda_nm.to_vec(),
+        r_edges_mm: bins.edges_mm().to_vec(),
+        rd_per_mm2: vec![vec![0.0; nr]; nl],
+        rd_per_mm2_se: vec![vec![0.0; nr]; nl],
+        rd_total: vec![0.0; nl],
+        rd_total_se: vec![0.0; nl],
+        rd_unscattered: vec![0.0; nl],
+        tt: vec![0.0; nl],
+        tt_se: vec![0.0; nl],
+        rsp: vec![0.0; nl],
+        photons: vec![0; nl],
+        group: 0,
+    }
+}
+
+/// Stores absorption set `t` of group `g`'s run at wavelength index `i` in profile `p`: the
+/// means over the run's photons, Rd(r) per unit area of each annulus (of area `areas`, mm²).
+fn store_run(
+    p: &mut SpectralProfile,
+    g: usize,
+    i: usize,
+    run: &WhiteSets,
+    t: &SetTally,
+    areas: &[f64],
+) {
+    let n = run.photons;
+    p.group = g;
+    p.photons[i] = n;
+    p.rsp[i] = run.rsp;
+    p.rd_total[i] = t.rd.mean(n);
+    p.rd_total_se[i] = t.rd.se(n);
+    p.rd_unscattered[i] = t.rd_unscattered.mean(n);
+    p.tt[i] = t.tt.mean(n);
+    p.tt_se[i] = t.tt.se(n);
+    for k in 0..areas.len() {
+        p.rd_per_mm2[i][k] = t.rd_r[k].mean(n) / areas[k];
+        p.rd_per_mm2_se[i][k] = t.rd_r[k].se(n) / areas[k];
+    }
+}
+
 /// Photons of group `g` per wavelength: `o.photons`, times an integer boost ⌊e_max/e_λ⌋ capped
 /// at `o.max_boost`, e_λ the scattering events per packet of a short pilot run (deterministic:
 /// seeded like the main runs) and e_max the group's largest. Cheap wavelengths — strongly
 /// absorbed blue light, where dark skin's profiles are noisiest — get more packets for about
 /// the cost of the group's most expensive wavelength.
-#[allow(clippy::too_many_arguments)]
 fn photon_counts(
-    entries: &[OpticsEntry],
-    lambda_nm: &[f64],
-    plan: &Plan,
-    o: &SimOptions,
+    sim: &SkinSimulation<'_>,
     units: &SkinUnits,
     runner: &Runner,
     prefix: &str,
     g: usize,
 ) -> anyhow::Result<Vec<u64>> {
+    let SkinSimulation {
+        entries,
+        lambda_nm,
+        plan,
+        o,
+        ..
+    } = *sim;
     let nl = lambda_nm.len();
     if o.max_boost <= 1 {
         return Ok(vec![o.photons; nl]);
@@ -370,8 +391,10 @@ fn photon_counts(
         let run = runner
             .unit(&id, units.pilot[g][i], None, pilot, || {
                 let (stack, sets) = stack_and_sets(entries, plan, g, i);
-                let mut mo =
-                    McOptions::new(pilot, task_seed(o.seed ^ PILOT_TAG, plan.digests[g], i));
+                let mut mo = McOptions::new(
+                    pilot,
+                    group_wavelength_seed(o.seed ^ PILOT_TAG, plan.digests[g], i),
+                );
                 mo.threads = o.threads;
                 mo.random_entry = true;
                 mo.cancel = runner.cancel;

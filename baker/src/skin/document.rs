@@ -1,9 +1,7 @@
 //! The skin-optics document ([`formats::optics`]) built from model results: what `optics.json`
 //! and every later stage (transport stacks, tables, exports) read.
 
-use formats::optics::{
-    self, OpticsDocument, OpticsEntry, OpticsJunction, OpticsLayer, OpticsSurface,
-};
+use formats::optics::{self, OpticsDocument, OpticsEntry, OpticsLayer};
 
 use super::{ModelKind, SkinOptics, SkinParams};
 
@@ -33,24 +31,8 @@ pub fn entry(name: &str, params: &SkinParams, o: &SkinOptics) -> OpticsEntry {
                 musp_per_mm: l.musp_per_mm.clone(),
             })
             .collect(),
-        junction: OpticsJunction {
-            z_mean_mm: j.z_mean_mm,
-            amplitude_mm: j.amplitude_mm,
-            omega_x_per_mm: j.omega_x_per_mm,
-            omega_y_per_mm: j.omega_y_per_mm,
-            phi_x_rad: j.phi_x_rad,
-            phi_y_rad: j.phi_y_rad,
-        },
-        surface: OpticsSurface {
-            rz_um: s.rz_um,
-            sebum_mg_per_10cm2_3h: s.sebum_mg_per_10cm2_3h,
-            sebum_film_um: s.sebum_film_um,
-            alpha_sr_rad: s.alpha_sr_rad,
-            psi_s: s.psi_s,
-            beckmann_m: s.beckmann_m,
-            eta: s.eta,
-            f0: s.f0,
-        },
+        junction: j,
+        surface: s,
         intermediate: serde_json::to_value(&o.intermediate).expect("intermediate serialises"),
     }
 }

@@ -1,8 +1,6 @@
 //! Layered structure and its aging, §3.4.1: thickness atrophy (Table 1) and the
 //! dermo-epidermal junction (Eq. 1).
 
-use serde::Serialize;
-
 use super::{decades_since_reference, SkinParams};
 
 /// Thickness of every layer at the entry's age, mm (Table 1: linear atrophy per decade).
@@ -17,29 +15,8 @@ pub fn thickness_mm(p: &SkinParams) -> [f64; 5] {
 
 /// The dermo-epidermal junction of Eq. 1:
 /// z(x, y) = z̄ + A·sin(ωx·x + φx)·sin(ωy·y + φy), z positive into the skin.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Junction {
-    /// Mean depth z̄ of the living-epidermis / papillary-dermis interface, mm.
-    pub z_mean_mm: f64,
-    /// Peak amplitude A, mm (0 = planar).
-    pub amplitude_mm: f64,
-    /// Angular spatial frequencies ωx, ωy, rad/mm.
-    pub omega_x_per_mm: f64,
-    pub omega_y_per_mm: f64,
-    /// Phases φx, φy, rad.
-    pub phi_x_rad: f64,
-    pub phi_y_rad: f64,
-}
-
-impl Junction {
-    /// Depth of the interface at (x, y), mm (Eq. 1).
-    pub fn z_mm(&self, x_mm: f64, y_mm: f64) -> f64 {
-        self.z_mean_mm
-            + self.amplitude_mm
-                * (self.omega_x_per_mm * x_mm + self.phi_x_rad).sin()
-                * (self.omega_y_per_mm * y_mm + self.phi_y_rad).sin()
-    }
-}
+/// The junction of an entry (Eq. 1), as the optics files store it.
+pub use formats::OpticsJunction as Junction;
 
 /// Rete-ridge amplitude at the entry's age, µm: the age-30 value down to 0 at 80, linearly.
 ///

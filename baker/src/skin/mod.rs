@@ -17,8 +17,8 @@ pub mod surface;
 
 pub use model::{evaluate, Intermediate, LayerOptics, ModelError, SkinOptics};
 pub use params::{
-    BodyLocation, Freeze, Gender, HypodermisAbsorption, Layer, MelaninInput, ModelKind,
-    PheomelaninAbsorption, SkinParams, SkinType, SkinTypeMelanin,
+    BodyLocation, Freeze, Gender, HypodermisAbsorption, MelaninInput, ModelKind,
+    PheomelaninAbsorption, SkinLayer, SkinParams, SkinType, SkinTypeMelanin,
 };
 
 /// Age at which Table 1 and Table 2 give their base values; aging laws run from here (§3.4.1).

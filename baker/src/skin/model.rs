@@ -6,7 +6,7 @@ use thiserror::Error;
 use super::absorption::{self, Chromophores};
 use super::collagen;
 use super::layers::{self, Junction};
-use super::params::{Layer, ModelKind, SkinParams};
+use super::params::{ModelKind, SkinLayer, SkinParams};
 use super::scattering;
 use super::surface::{self, Surface};
 use crate::spectral::WavelengthGrid;
@@ -71,7 +71,7 @@ pub struct SkinOptics {
 /// Evaluates the model for `p` on `grid`.
 pub fn evaluate(p: &SkinParams, grid: &WavelengthGrid) -> Result<SkinOptics, ModelError> {
     let d = layers::thickness_mm(p);
-    for layer in Layer::ALL {
+    for layer in SkinLayer::ALL {
         let d_mm = d[layer.index()];
         if d_mm <= 0.0 {
             return Err(ModelError::LayerVanished {
@@ -116,7 +116,7 @@ pub fn evaluate(p: &SkinParams, grid: &WavelengthGrid) -> Result<SkinOptics, Mod
     let rd_musp = spectrum(&|l| scattering::musp_dermis(l, &w_rd));
     let hd_musp = spectrum(&scattering::musp_hypodermis);
 
-    let layer = |l: Layer, d_mm: f64, mua: Vec<f64>, musp: Vec<f64>| LayerOptics {
+    let layer = |l: SkinLayer, d_mm: f64, mua: Vec<f64>, musp: Vec<f64>| LayerOptics {
         name: l.display_name(),
         d_mm,
         eta: l.eta(),
@@ -135,11 +135,11 @@ pub fn evaluate(p: &SkinParams, grid: &WavelengthGrid) -> Result<SkinOptics, Mod
                 });
             }
             let stack = vec![
-                layer(Layer::StratumCorneum, d[0], sc_mua, epi_musp.clone()),
-                layer(Layer::LivingEpidermis, d[1], le_mua, epi_musp),
-                layer(Layer::PapillaryDermis, d[2], pd_mua, pd_musp),
-                layer(Layer::ReticularDermis, d[3], rd_mua, rd_musp),
-                layer(Layer::Hypodermis, d[4], hd_mua, hd_musp),
+                layer(SkinLayer::StratumCorneum, d[0], sc_mua, epi_musp.clone()),
+                layer(SkinLayer::LivingEpidermis, d[1], le_mua, epi_musp),
+                layer(SkinLayer::PapillaryDermis, d[2], pd_mua, pd_musp),
+                layer(SkinLayer::ReticularDermis, d[3], rd_mua, rd_musp),
+                layer(SkinLayer::Hypodermis, d[4], hd_mua, hd_musp),
             ];
             (stack, j)
         }
@@ -152,24 +152,24 @@ pub fn evaluate(p: &SkinParams, grid: &WavelengthGrid) -> Result<SkinOptics, Mod
                 LayerOptics {
                     name: "epidermis",
                     d_mm: d[0] + d[1],
-                    eta: Layer::LivingEpidermis.eta(),
+                    eta: SkinLayer::LivingEpidermis.eta(),
                     mua_per_mm: le_mua,
                     musp_per_mm: epi_musp,
                 },
                 LayerOptics {
                     name: "dermis",
                     d_mm: d[2] + d[3],
-                    eta: Layer::ReticularDermis.eta(),
+                    eta: SkinLayer::ReticularDermis.eta(),
                     mua_per_mm: rd_mua,
                     musp_per_mm: rd_musp,
                 },
-                layer(Layer::Hypodermis, d[4], hd_mua, hd_musp),
+                layer(SkinLayer::Hypodermis, d[4], hd_mua, hd_musp),
             ];
             (stack, j)
         }
     };
     // The outer surface is stratum corneum in both models (§3.4.2).
-    let surface: Surface = surface::surface(p, Layer::StratumCorneum.eta());
+    let surface: Surface = surface::surface(p, SkinLayer::StratumCorneum.eta());
     let x = 700.0 / scattering::LAMBDA_REF_NM;
     Ok(SkinOptics {
         model: p.model,

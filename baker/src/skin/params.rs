@@ -6,7 +6,7 @@ use serde::Serialize;
 /// The five layers of the full model (§3.4.1), top to bottom.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Layer {
+pub enum SkinLayer {
     StratumCorneum,
     LivingEpidermis,
     PapillaryDermis,
@@ -14,34 +14,34 @@ pub enum Layer {
     Hypodermis,
 }
 
-impl Layer {
-    pub const ALL: [Layer; 5] = [
-        Layer::StratumCorneum,
-        Layer::LivingEpidermis,
-        Layer::PapillaryDermis,
-        Layer::ReticularDermis,
-        Layer::Hypodermis,
+impl SkinLayer {
+    pub const ALL: [SkinLayer; 5] = [
+        SkinLayer::StratumCorneum,
+        SkinLayer::LivingEpidermis,
+        SkinLayer::PapillaryDermis,
+        SkinLayer::ReticularDermis,
+        SkinLayer::Hypodermis,
     ];
 
     /// Name used in every output (`--json`, CSV, `.mci` comments).
     pub fn display_name(self) -> &'static str {
         match self {
-            Layer::StratumCorneum => "stratum corneum",
-            Layer::LivingEpidermis => "living epidermis",
-            Layer::PapillaryDermis => "papillary dermis",
-            Layer::ReticularDermis => "reticular dermis",
-            Layer::Hypodermis => "hypodermis",
+            SkinLayer::StratumCorneum => "stratum corneum",
+            SkinLayer::LivingEpidermis => "living epidermis",
+            SkinLayer::PapillaryDermis => "papillary dermis",
+            SkinLayer::ReticularDermis => "reticular dermis",
+            SkinLayer::Hypodermis => "hypodermis",
         }
     }
 
     /// Key used in specs (`thickness_mm: {living_epidermis: 0.08}`).
     pub fn key(self) -> &'static str {
         match self {
-            Layer::StratumCorneum => "stratum_corneum",
-            Layer::LivingEpidermis => "living_epidermis",
-            Layer::PapillaryDermis => "papillary_dermis",
-            Layer::ReticularDermis => "reticular_dermis",
-            Layer::Hypodermis => "hypodermis",
+            SkinLayer::StratumCorneum => "stratum_corneum",
+            SkinLayer::LivingEpidermis => "living_epidermis",
+            SkinLayer::PapillaryDermis => "papillary_dermis",
+            SkinLayer::ReticularDermis => "reticular_dermis",
+            SkinLayer::Hypodermis => "hypodermis",
         }
     }
 
@@ -52,22 +52,22 @@ impl Layer {
     /// Refractive index η, Table 1.
     pub fn eta(self) -> f64 {
         match self {
-            Layer::StratumCorneum => 1.53,
-            Layer::LivingEpidermis => 1.34,
-            Layer::PapillaryDermis => 1.395,
-            Layer::ReticularDermis => 1.39,
-            Layer::Hypodermis => 1.44,
+            SkinLayer::StratumCorneum => 1.53,
+            SkinLayer::LivingEpidermis => 1.34,
+            SkinLayer::PapillaryDermis => 1.395,
+            SkinLayer::ReticularDermis => 1.39,
+            SkinLayer::Hypodermis => 1.44,
         }
     }
 
     /// Water volume fraction f_H2O, Table 2 (and Table 4's caption).
     pub fn default_water_fraction(self) -> f64 {
         match self {
-            Layer::StratumCorneum => 0.05,
-            Layer::LivingEpidermis => 0.2,
-            Layer::PapillaryDermis => 0.5,
-            Layer::ReticularDermis => 0.7,
-            Layer::Hypodermis => 0.7,
+            SkinLayer::StratumCorneum => 0.05,
+            SkinLayer::LivingEpidermis => 0.2,
+            SkinLayer::PapillaryDermis => 0.5,
+            SkinLayer::ReticularDermis => 0.7,
+            SkinLayer::Hypodermis => 0.7,
         }
     }
 }
@@ -90,7 +90,7 @@ pub enum BodyLocation {
 }
 
 impl BodyLocation {
-    /// Layer thicknesses at the reference age of 30, mm, in [`Layer::ALL`] order.
+    /// SkinLayer thicknesses at the reference age of 30, mm, in [`SkinLayer::ALL`] order.
     /// Face and forearm: Table 1 (Table 4 uses the same values for both). Back of hand and
     /// palm: Table 4 rows 42-Left and 42-Right.
     pub fn thickness_at_30_mm(self) -> [f64; 5] {
@@ -144,18 +144,6 @@ impl SkinType {
             SkinType::IV => "IV",
             SkinType::V => "V",
             SkinType::VI => "VI",
-        }
-    }
-
-    /// Melanosome volume fraction range [lo, hi) of the type, Fig. 40 caption.
-    pub fn caption_range(self) -> (f64, f64) {
-        match self {
-            SkinType::I => (0.0, 0.03),
-            SkinType::II => (0.03, 0.05),
-            SkinType::III => (0.05, 0.15),
-            SkinType::IV => (0.15, 0.25),
-            SkinType::V => (0.25, 0.35),
-            SkinType::VI => (0.35, f64::INFINITY),
         }
     }
 }
@@ -365,7 +353,7 @@ impl SkinParams {
             pheomelanin_g_per_l: 12.0,
             pheomelanin_absorption: PheomelaninAbsorption::ThesisFit,
             hypodermis_absorption: HypodermisAbsorption::Blood,
-            water_fraction: Layer::ALL.map(Layer::default_water_fraction),
+            water_fraction: SkinLayer::ALL.map(SkinLayer::default_water_fraction),
             thickness_at_30_mm: location.thickness_at_30_mm(),
             atrophy_per_decade: location.atrophy_per_decade(),
             // Table 4 caption: rete ridges of 100 µm at 30; Eq. 1's amplitude is half of it.

@@ -1,8 +1,6 @@
 //! Surface reflection, §3.4.2 and Appendix 3.8: Beckmann roughness from the skin profile's Rz
 //! and the sebum film that fills the microfacets (Eqs. 11–13).
 
-use serde::Serialize;
-
 use super::params::{Gender, SkinParams};
 use super::piecewise_linear;
 
@@ -22,25 +20,8 @@ pub const SEBUM_KNOTS_FEMALE: [(f64, f64); 2] = [(30.0, 2.0), (80.0, 0.85)];
 /// (Appendix 3.8 quotes 3 → 1.69 µm films for the same figures).
 pub const FILM_UM_PER_SEBUM_MG: f64 = 1.0;
 
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Surface {
-    /// Mean peak-to-valley height of the skin profile, µm.
-    pub rz_um: f64,
-    /// Sebum production, mg lipid / 10 cm² / 3 h.
-    pub sebum_mg_per_10cm2_3h: f64,
-    /// Sebum film thickness s, µm.
-    pub sebum_film_um: f64,
-    /// α_sr = arctan(Rz / l_e), rad (§3.4.2).
-    pub alpha_sr_rad: f64,
-    /// ψ_s = 1 − a_s/a_t (Eq. 11).
-    pub psi_s: f64,
-    /// Beckmann roughness m = ψ_s·α_sr (Eq. 11).
-    pub beckmann_m: f64,
-    /// Refractive index of the outer surface (stratum corneum, Table 1).
-    pub eta: f64,
-    /// Normal-incidence Fresnel reflectance from air, ((η − 1)/(η + 1))².
-    pub f0: f64,
-}
+/// The surface parameters of an entry, as the optics files store them.
+pub use formats::OpticsSurface as Surface;
 
 /// Rz at the entry's age, µm.
 pub fn rz_um(p: &SkinParams) -> f64 {

@@ -22,9 +22,11 @@
 //! change memory): `specs/fitzpatrick.yaml` bound 0.12 GiB, measured 110 MiB; `specs/fibers.yaml`
 //! bound 0.34 GiB, measured 292 MiB.
 
+use super::check::{count_text, over_limit_message};
 use super::error::{SpecError, SpecErrors};
 use super::fiber::FiberSpec;
-use super::limits::count_text;
+use super::limits::BASE_BYTES;
+pub use super::limits::{skin_floor_bytes, GIB};
 use super::{SkinSpec, Spec};
 
 /// What the bake's flags change about its cost.
@@ -58,12 +60,6 @@ pub struct Cost {
     /// Upper bound of the peak heap, bytes ([module docs](self)).
     pub memory_bytes: f64,
 }
-
-/// The program itself (code, HDF5, thread stacks, allocator): what a tiny bake's peak resident
-/// set measures (79 MB for `tests/specs/profiles_small.yaml`), with room.
-const BASE_BYTES: f64 = 96.0 * 1024.0 * 1024.0;
-/// Bytes in a GiB.
-pub const GIB: f64 = (1u64 << 30) as f64;
 
 /// The cost of baking `spec` with `o`; an error if it is over the spec's limits.
 pub fn check(spec: &Spec, o: &Overrides) -> Result<Cost, SpecErrors> {
@@ -156,10 +152,7 @@ fn over(
         line: at.0,
         column: at.1,
         field: field.to_string(),
-        message: format!(
-            "{what}, over the limit of {limit} (`limits.{name}`); ask for less, or raise \
-             `limits.{name}` in the spec if you mean it"
-        ),
+        message: over_limit_message(&what, name, &limit),
     }
 }
 
@@ -197,17 +190,9 @@ fn skin_cost(s: &SkinSpec, o: &Overrides) -> Cost {
     }
 }
 
-/// The part of a skin bake's memory bound that does not depend on how entries group: the
-/// program, the spectral profiles of `entries` × `wavelengths` × `radial_bins` and the tables
-/// built from them (and their layer optics). The resolver checks it before it evaluates any
-/// entry, so a spec that cannot fit is refused at once.
-pub fn skin_floor_bytes(entries: f64, wavelengths: f64, radial_bins: f64) -> f64 {
-    BASE_BYTES + 3.0 * entries * wavelengths * (2.0 * radial_bins + 12.0) * 8.0
-}
-
 fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
     let st = &s.bake;
-    let per_direction = o.photons.unwrap_or(st.photons).div_ceil(st.batch).max(2) * st.batch;
+    let per_direction = st.batches_for(o.photons.unwrap_or(st.photons)) * st.batch;
     let grid_bins = ((180.0 / st.res_deg).round() * (360.0 / st.res_deg).round()).max(1.0);
     let t = o.threads.max(1) as f64;
     let value_bytes = match st.precision {
@@ -222,7 +207,8 @@ fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
         photons += stored * sections * per_direction as f64;
         let nch = (e.variants.len() * st.channels_per_variant()) as f64;
         let per_slice = nch * grid_bins * 8.0;
-        let unit = crate::fiber::bake::unit_len(e.stored_directions) as f64 * sections * per_slice;
+        let unit =
+            crate::fiber::slices::unit_len(e.stored_directions) as f64 * sections * per_slice;
         let tables = stored
             * (sections + f64::from(u8::from(sections > 1.0)))
             * nch

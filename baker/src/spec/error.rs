@@ -36,16 +36,6 @@ pub enum SpecError {
     },
 }
 
-/// A number as a person reads it in a message: `0.5`, `400`, `1e-9`, `1e300`, `NaN`
-/// (Rust's `{}` would print `1e-300` with 300 zeros).
-pub fn num(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
-}
-
 /// All errors found in one spec, reported together.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpecErrors(pub Vec<SpecError>);

@@ -1,10 +1,6 @@
 //! Which kind of spec a file is, decided from its parsed top-level keys (not from how the text
 //! looks: a byte-order mark, flow or JSON style and comments are all fine).
 
-use std::collections::BTreeMap;
-
-use serde::de::IgnoredAny;
-
 use super::error::SpecError;
 
 /// Skin (ch. 3: entries → optics and diffusion profiles) or fiber (ch. 5: fibers → BCSDFs).
@@ -35,12 +31,8 @@ pub const SHARED_KEYS: [&str; 2] = ["version", "limits"];
 /// with the field and what it allows); only a text with keys of both kinds, or of neither, is
 /// an error here.
 pub fn detect(file: &str, text: &str) -> Result<SpecKind, SpecError> {
-    let parsed = serde_saphyr::from_str_with_options::<BTreeMap<String, IgnoredAny>>(
-        text,
-        super::resolve::yaml_options(),
-    );
-    let keys: Vec<String> = match parsed {
-        Ok(map) => map.into_keys().collect(),
+    match super::yaml::top_level_keys(text) {
+        Ok(keys) => classify(file, &keys),
         // Over the parser's budgets (an alias bomb, deep nesting): that is the error, whatever
         // the kind.
         Err(e) if is_budget(&e.to_string()) => {
@@ -48,106 +40,112 @@ pub fn detect(file: &str, text: &str) -> Result<SpecKind, SpecError> {
                 .location()
                 .map(|l| (l.line(), l.column()))
                 .unwrap_or((1, 1));
-            return Err(SpecError::Syntax {
+            Err(SpecError::Syntax {
                 file: file.to_string(),
                 line,
                 column,
                 message: super::syntax::clean(&e.to_string()),
-            });
+            })
         }
-        // Not a mapping, or broken YAML: the skin parser gives the precise message, unless the
-        // text names a fiber key at the start of a line (so a fiber spec with a typo still
-        // gets the fiber parser's message).
-        Err(_) => {
-            let fiberish = text.lines().any(|l| {
-                let l = l.trim_start_matches(['{', ' ', '"', '\'', '\u{feff}']);
-                FIBER_KEYS.iter().any(|k| {
-                    l.strip_prefix(k)
-                        .is_some_and(|r| r.trim_start_matches(['"', '\'']).starts_with(':'))
-                })
-            });
-            return Ok(if fiberish {
-                SpecKind::Fiber
-            } else {
-                SpecKind::Skin
-            });
-        }
+        // Not a mapping, or broken YAML: there are no keys to go by.
+        Err(_) => Ok(guess_unparsed(text)),
+    }
+}
+
+/// The kind whose parser reports a text that is not a YAML mapping: the skin parser gives the
+/// precise message, unless the text names a fiber key at the start of a line (so a fiber spec
+/// with a typo still gets the fiber parser's message). The one place the kind is read from the
+/// text rather than from parsed keys: there are none.
+fn guess_unparsed(text: &str) -> SpecKind {
+    let fiberish = text.lines().any(|l| {
+        let l = l.trim_start_matches(['{', ' ', '"', '\'', '\u{feff}']);
+        FIBER_KEYS.iter().any(|k| {
+            l.strip_prefix(k)
+                .is_some_and(|r| r.trim_start_matches(['"', '\'']).starts_with(':'))
+        })
+    });
+    if fiberish {
+        SpecKind::Fiber
+    } else {
+        SpecKind::Skin
+    }
+}
+
+/// What both kinds take, for messages about a spec that is neither or both.
+fn both_kinds() -> String {
+    format!(
+        "a skin spec has {} (with {}); a fiber spec has {} (with {})",
+        SKIN_KEYS.join(", "),
+        SHARED_KEYS.join(", "),
+        FIBER_KEYS.join(", "),
+        SHARED_KEYS.join(", ")
+    )
+}
+
+/// The kind of a spec with top-level `keys`.
+fn classify(file: &str, keys: &[String]) -> Result<SpecKind, SpecError> {
+    let of = |set: &[&str]| -> Vec<&str> {
+        keys.iter()
+            .map(String::as_str)
+            .filter(|k| set.contains(k))
+            .collect()
     };
-    let skin: Vec<&str> = keys
-        .iter()
-        .map(String::as_str)
-        .filter(|k| SKIN_KEYS.contains(k))
-        .collect();
-    let fiber: Vec<&str> = keys
-        .iter()
-        .map(String::as_str)
-        .filter(|k| FIBER_KEYS.contains(k))
-        .collect();
-    let both = || {
-        format!(
-            "a skin spec has {} (with {}); a fiber spec has {} (with {})",
-            SKIN_KEYS.join(", "),
-            SHARED_KEYS.join(", "),
-            FIBER_KEYS.join(", "),
-            SHARED_KEYS.join(", ")
-        )
+    let (skin, fiber) = (of(&SKIN_KEYS), of(&FIBER_KEYS));
+    let invalid = |message: String| SpecError::Invalid {
+        file: file.to_string(),
+        line: 1,
+        column: 1,
+        field: "spec".into(),
+        message,
     };
     match (skin.is_empty(), fiber.is_empty()) {
         (false, true) => Ok(SpecKind::Skin),
         (true, false) => Ok(SpecKind::Fiber),
-        (false, false) => Err(SpecError::Invalid {
-            file: file.to_string(),
-            line: 1,
-            column: 1,
-            field: "spec".into(),
-            message: format!(
-                "mixes skin keys ({}) and fiber keys ({}); a spec is one kind: {}",
-                skin.join(", "),
-                fiber.join(", "),
-                both()
-            ),
-        }),
+        (false, false) => Err(invalid(format!(
+            "mixes skin keys ({}) and fiber keys ({}); a spec is one kind: {}",
+            skin.join(", "),
+            fiber.join(", "),
+            both_kinds()
+        ))),
         (true, true) => {
             let unknown: Vec<&str> = keys
                 .iter()
                 .map(String::as_str)
                 .filter(|k| !SHARED_KEYS.contains(k))
                 .collect();
-            // A misspelt key (`entry:`, `fiber:`): the kind it is closest to, whose parser
-            // then points at the line and lists that kind's keys.
-            let near = |set: &[&str]| {
-                unknown
-                    .iter()
-                    .flat_map(|u| set.iter().map(move |k| strsim::jaro_winkler(u, k)))
-                    .fold(0.0f64, f64::max)
-            };
-            let (skin_s, fiber_s) = (near(&SKIN_KEYS), near(&FIBER_KEYS));
-            if skin_s.max(fiber_s) >= 0.85 {
-                return Ok(if fiber_s > skin_s {
-                    SpecKind::Fiber
-                } else {
-                    SpecKind::Skin
-                });
+            if let Some(kind) = nearest_kind(&unknown) {
+                return Ok(kind);
             }
-            Err(SpecError::Invalid {
-                file: file.to_string(),
-                line: 1,
-                column: 1,
-                field: "spec".into(),
-                message: if keys.is_empty() {
-                    format!("is empty: {}", both())
-                } else if unknown.is_empty() {
-                    format!("has no entries or fibers: {}", both())
-                } else {
-                    format!(
-                        "is neither a skin nor a fiber spec (top-level keys: {}): {}",
-                        unknown.join(", "),
-                        both()
-                    )
-                },
-            })
+            Err(invalid(if keys.is_empty() {
+                format!("is empty: {}", both_kinds())
+            } else if unknown.is_empty() {
+                format!("has no entries or fibers: {}", both_kinds())
+            } else {
+                format!(
+                    "is neither a skin nor a fiber spec (top-level keys: {}): {}",
+                    unknown.join(", "),
+                    both_kinds()
+                )
+            }))
         }
     }
+}
+
+/// A misspelt key (`entry:`, `fiber:`): the kind it is closest to, whose parser then points at
+/// the line and lists that kind's keys; `None` when no key is close to either kind's.
+fn nearest_kind(unknown: &[&str]) -> Option<SpecKind> {
+    let near = |set: &[&str]| {
+        unknown
+            .iter()
+            .flat_map(|u| set.iter().map(move |k| strsim::jaro_winkler(u, k)))
+            .fold(0.0f64, f64::max)
+    };
+    let (skin_s, fiber_s) = (near(&SKIN_KEYS), near(&FIBER_KEYS));
+    (skin_s.max(fiber_s) >= 0.85).then_some(if fiber_s > skin_s {
+        SpecKind::Fiber
+    } else {
+        SpecKind::Skin
+    })
 }
 
 /// A serde-saphyr error that is a breached safety budget, not a syntax or type error.

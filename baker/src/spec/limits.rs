@@ -26,8 +26,8 @@
 //! The process's own address-space limit (`ulimit -v`) is a limit too: a bake whose memory
 //! bound does not fit in 75 % of it is refused before it starts.
 
-use super::raw::Spanned;
-use super::resolve::{loc, Ctx};
+use super::check::{count_text, num, Ctx};
+use super::yaml::Spanned;
 
 /// The limits of one spec (defaults, raised by its `limits:` block).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -52,8 +52,8 @@ impl Default for Limits {
             photons: 1e11,
             variants: 1024,
             table_gib: 8.0,
-            mask_pixels: 4096 * 4096,
-            polygon_vertices: 100_000,
+            mask_pixels: crate::fiber::section::mask::DEFAULT_MAX_PIXELS,
+            polygon_vertices: crate::fiber::section::mask::DEFAULT_MAX_VERTICES,
             memory_gib: 16.0,
         }
     }
@@ -74,17 +74,11 @@ pub struct RawLimits {
     pub memory_gib: Option<Spanned<f64>>,
 }
 
-/// `n` with thousands separators (`400,000,000,001`), for counts in messages.
-pub fn count_text(n: u64) -> String {
-    let s = n.to_string();
-    let mut out = String::new();
-    for (i, c) in s.chars().enumerate() {
-        if i > 0 && (s.len() - i) % 3 == 0 {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
+/// How many wavelengths `start_nm..=stop_nm` in steps of `step_nm` gives, as
+/// [`crate::spectral::WavelengthGrid::uniform`] counts them, in f64 so no step can overflow the
+/// count (both kinds count before any wavelength is built).
+pub(super) fn wavelength_count(start_nm: f64, stop_nm: f64, step_nm: f64) -> f64 {
+    ((stop_nm - start_nm) / step_nm + 1e-9).floor() + 1.0
 }
 
 impl Ctx {
@@ -94,48 +88,39 @@ impl Ctx {
         let mut l = Limits::default();
         let Some(raw) = raw else { return l };
         let r = &raw.value;
-        let whole =
-            |this: &mut Self, field: &str, v: &Option<Spanned<f64>>, hi: f64, out: &mut u64| {
-                if let Some(v) = v {
-                    if let Some(x) = this.in_range(field, v, 1.0, hi, false) {
-                        if x.fract() == 0.0 {
-                            *out = x as u64;
-                        } else {
-                            this.invalid(loc(v), field, format!("{x} is not a whole number"));
-                        }
-                    }
-                }
-            };
-        whole(
-            self,
-            "limits.wavelengths",
-            &r.wavelengths,
-            1e6,
-            &mut l.wavelengths,
-        );
-        whole(
-            self,
-            "limits.radial_bins",
-            &r.radial_bins,
-            1e6,
-            &mut l.radial_bins,
-        );
-        whole(self, "limits.entries", &r.entries, 1e7, &mut l.entries);
-        whole(self, "limits.variants", &r.variants, 1e6, &mut l.variants);
-        whole(
-            self,
-            "limits.mask_pixels",
-            &r.mask_pixels,
-            1e10,
-            &mut l.mask_pixels,
-        );
-        whole(
-            self,
-            "limits.polygon_vertices",
-            &r.polygon_vertices,
-            1e8,
-            &mut l.polygon_vertices,
-        );
+        let whole = [
+            (
+                "limits.wavelengths",
+                &r.wavelengths,
+                1e6,
+                &mut l.wavelengths,
+            ),
+            (
+                "limits.radial_bins",
+                &r.radial_bins,
+                1e6,
+                &mut l.radial_bins,
+            ),
+            ("limits.entries", &r.entries, 1e7, &mut l.entries),
+            ("limits.variants", &r.variants, 1e6, &mut l.variants),
+            (
+                "limits.mask_pixels",
+                &r.mask_pixels,
+                1e10,
+                &mut l.mask_pixels,
+            ),
+            (
+                "limits.polygon_vertices",
+                &r.polygon_vertices,
+                1e8,
+                &mut l.polygon_vertices,
+            ),
+        ];
+        for (field, v, hi, out) in whole {
+            if let Some(n) = self.whole(field, v, 1.0, hi) {
+                *out = n;
+            }
+        }
         l.photons = self.opt_range("limits.photons", &r.photons, 1.0, 1e18, false, l.photons);
         l.table_gib = self.opt_range(
             "limits.table_gib",
@@ -156,33 +141,46 @@ impl Ctx {
         l
     }
 
-    /// Records that `what` (computed from the value at `at`) is over limit `name`.
-    pub(super) fn over_limit(
+    /// Records that `start_nm..=stop_nm` in steps of `step_nm` (the value at `at`) gives `n`
+    /// wavelengths, over `limits.wavelengths`.
+    pub(super) fn too_many_wavelengths(
         &mut self,
         at: (u64, u64),
         field: &str,
-        what: String,
-        name: &str,
-        limit: String,
+        (start_nm, stop_nm, step_nm): (f64, f64, f64),
+        n: f64,
+        limits: &Limits,
     ) {
-        self.invalid(
+        self.over_limit(
             at,
             field,
             format!(
-                "{what}, over the limit of {limit} (`limits.{name}`); ask for less, or raise \
-                 `limits.{name}` in the spec if you mean it"
+                "{}–{} nm in steps of {} nm gives {} wavelengths",
+                num(start_nm),
+                num(stop_nm),
+                num(step_nm),
+                if n < 1e15 {
+                    count_text(n as u64)
+                } else {
+                    format!("{n:.3e}")
+                }
             ),
+            "wavelengths",
+            count_text(limits.wavelengths),
         );
     }
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn counts_read_well() {
-        assert_eq!(super::count_text(0), "0");
-        assert_eq!(super::count_text(999), "999");
-        assert_eq!(super::count_text(1000), "1,000");
-        assert_eq!(super::count_text(400_000_000_001), "400,000,000,001");
-    }
+/// The program itself (code, HDF5, thread stacks, allocator): what a tiny bake's peak resident
+/// set measures (79 MB for `tests/specs/profiles_small.yaml`), with room.
+pub const BASE_BYTES: f64 = 96.0 * 1024.0 * 1024.0;
+/// Bytes in a GiB.
+pub const GIB: f64 = (1u64 << 30) as f64;
+
+/// The part of a skin bake's memory bound that does not depend on how entries group: the
+/// program, the spectral profiles of `entries` × `wavelengths` × `radial_bins` and the tables
+/// built from them (and their layer optics). The resolver checks it before it evaluates any
+/// entry, so a spec that cannot fit is refused at once.
+pub fn skin_floor_bytes(entries: f64, wavelengths: f64, radial_bins: f64) -> f64 {
+    BASE_BYTES + 3.0 * entries * wavelengths * (2.0 * radial_bins + 12.0) * 8.0
 }

@@ -1,33 +1,40 @@
-//! The YAML spec language, in two stages (ripgrep's low/high args): [`raw`] mirrors the file
-//! with a location on every value; [`resolve`] (skin) and [`fiber`] validate ranges, apply
-//! defaults and sweeps, check [`limits`] and [`names`], and produce model inputs. Nothing
-//! downstream sees raw YAML, and nothing downstream rejects a spec the resolver accepted:
-//! `baker validate` and `baker bake` share this code path.
+//! The YAML spec language, of two kinds decided by the top-level keys ([`kind`]): [`skin`]
+//! (`entries:`, `wavelengths:`, `profiles:` …) and [`fiber`] (`fibers:`, `dyes:`, `bake:` …).
+//! Each kind has two stages of its own (ripgrep's low/high args): `raw` mirrors the file with
+//! a location on every value; the resolver validates ranges, applies defaults and sweeps,
+//! checks [`limits`] and [`names`], and produces model inputs. The checking helpers both
+//! kinds use are in one place (`check`), as are reading YAML (`yaml`) and turning its errors
+//! into a user's terms (`syntax`). Nothing downstream sees raw YAML, and nothing downstream
+//! rejects a spec the resolver accepted: `baker validate` and `baker bake` share this code
+//! path.
 //!
 //! [`load_any`] reads a file once, decides its [`kind`] from its top-level keys and resolves it.
 
 pub mod budget;
+mod check;
 pub mod error;
 pub mod fiber;
 pub mod kind;
 pub mod limits;
 pub mod names;
-pub mod raw;
-pub mod resolve;
+pub mod skin;
 mod syntax;
+mod yaml;
 
 use std::path::Path;
 
+pub use crate::files::sha256_hex;
 pub use error::{SpecError, SpecErrors};
+pub use fiber::{FiberEntry, FiberSpec};
 pub use kind::SpecKind;
 pub use limits::Limits;
-pub use resolve::{load, load_str, ProfileSettings, ResolvedEntry, SkinSpec};
+pub use skin::{load_str, ProfileSettings, ResolvedEntry, SkinSpec};
 
 /// A resolved spec of either kind.
 #[derive(Debug, Clone)]
 pub enum Spec {
     Skin(SkinSpec),
-    Fiber(fiber::FiberSpec),
+    Fiber(FiberSpec),
 }
 
 impl Spec {
@@ -102,16 +109,23 @@ pub fn load_as(path: &Path, want: SpecKind) -> Result<Spec, SpecErrors> {
 /// [`load_any`] of spec text; files the spec names are relative to `dir`.
 pub fn load_any_str(file: &str, text: &str, dir: &Path) -> Result<Spec, SpecErrors> {
     match kind::detect(file, text).map_err(|e| SpecErrors(vec![e]))? {
-        SpecKind::Skin => load_str(file, text).map(Spec::Skin),
+        SpecKind::Skin => skin::load_str(file, text).map(Spec::Skin),
         SpecKind::Fiber => fiber::load_str(file, text, dir).map(Spec::Fiber),
     }
 }
 
-/// SHA-256 of bytes, lower-case hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    use sha2::Digest as _;
-    sha2::Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+/// Reads and validates the skin spec at `path` (a fiber spec is an error that says so).
+pub fn load(path: &Path) -> Result<SkinSpec, SpecErrors> {
+    match load_as(path, SpecKind::Skin)? {
+        Spec::Skin(s) => Ok(s),
+        Spec::Fiber(_) => unreachable!("load_as checked the kind"),
+    }
+}
+
+/// Reads and validates the fiber spec at `path` (a skin spec is an error that says so).
+pub fn load_fiber(path: &Path) -> Result<FiberSpec, SpecErrors> {
+    match load_as(path, SpecKind::Fiber)? {
+        Spec::Fiber(s) => Ok(s),
+        Spec::Skin(_) => unreachable!("load_as checked the kind"),
+    }
 }

@@ -9,7 +9,7 @@ pub mod table;
 
 pub use colour::ColourMap;
 pub use grid::WavelengthGrid;
-pub use table::{SpectralTable, TableError};
+pub use table::{SpectralTable, SpectralTableError};
 
 use std::sync::OnceLock;
 

@@ -2,8 +2,9 @@
 
 use thiserror::Error;
 
+/// Why a spectral CSV table cannot be read.
 #[derive(Debug, Error)]
-pub enum TableError {
+pub enum SpectralTableError {
     #[error("{file}:{line}: {message}")]
     Parse {
         file: String,
@@ -26,7 +27,7 @@ pub struct SpectralTable {
 impl SpectralTable {
     /// Parses `text`: lines starting with `#` are the header (source, units); every other
     /// non-empty line is `lambda_nm,v1,v2,…`; `column` picks the value column (1 = first after λ).
-    pub fn parse_csv(name: &str, text: &str, column: usize) -> Result<Self, TableError> {
+    pub fn parse_csv(name: &str, text: &str, column: usize) -> Result<Self, SpectralTableError> {
         let mut lambda_nm = Vec::new();
         let mut value = Vec::new();
         for (i, raw) in text.lines().enumerate() {
@@ -34,7 +35,7 @@ impl SpectralTable {
             if line.is_empty() || line.starts_with('#') {
                 continue;
             }
-            let err = |message: String| TableError::Parse {
+            let err = |message: String| SpectralTableError::Parse {
                 file: name.to_string(),
                 line: i + 1,
                 message,
@@ -61,7 +62,7 @@ impl SpectralTable {
             value.push(v);
         }
         if lambda_nm.is_empty() {
-            return Err(TableError::Empty {
+            return Err(SpectralTableError::Empty {
                 file: name.to_string(),
             });
         }

@@ -8,9 +8,9 @@ use rayon::prelude::*;
 use super::boundary::{fresnel, normal_reflectance};
 use super::junction::HeightField;
 use super::phase::sample_hg;
-use super::rng::{batch_rng, uniform, BatchRng};
 use super::stack::{Stack, StackError, MAX_LAYERS};
-use super::tally::{McResult, Tally};
+use super::tally::{McResult, RadialTally};
+use crate::math::rng::{batch_rng, uniform, BatchRng};
 
 /// Russian roulette: packets below this weight play (MCML's WEIGHT = 1e-4)…
 pub const ROULETTE_WEIGHT: f64 = 1e-4;
@@ -29,11 +29,9 @@ pub struct McOptions {
     pub threads: Option<usize>,
     /// Photons per batch (one RNG stream each). Results depend on it, not on the threads.
     pub batch_size: u64,
-    /// Draw a progress bar on stderr (shown only on a terminal).
-    pub progress: bool,
-    /// Advance this bar (photons) instead of drawing one per run: a bake shows one bar over
-    /// all its simulations.
-    pub bar: Option<indicatif::ProgressBar>,
+    /// Where finished photon packets are reported (a bake shows one bar over all its
+    /// simulations; `baker mc` one per run).
+    pub progress: crate::progress::Reporter,
     /// With a junction: each packet enters at a uniformly random point of the junction's
     /// period cell, and radii are measured from that point. The result is the profile averaged
     /// over where the beam meets the papillae, what a renderer applying one profile everywhere
@@ -51,8 +49,7 @@ impl McOptions {
             seed,
             threads: None,
             batch_size: 10_000,
-            progress: false,
-            bar: None,
+            progress: None,
             random_entry: false,
             cancel: crate::cancel::Cancel::NEVER,
         }
@@ -259,6 +256,198 @@ fn spin(u: &mut [f64; 3], g: f64, rng: &mut BatchRng) {
     }
 }
 
+/// One photon packet in flight.
+struct Packet {
+    /// Entry point on the surface: radii are measured from it.
+    origin: [f64; 2],
+    pos: [f64; 3],
+    u: [f64; 3],
+    w: f64,
+    layer: usize,
+    /// At least one scattering event so far.
+    scattered: bool,
+    /// Optical depth left to the next interaction (≤ 0: draw a new one).
+    s_left: f64,
+    /// Path length per layer, mm (white mode only).
+    path: [f64; MAX_LAYERS],
+    /// ln of the weight under the reference absorption (white mode only).
+    log_w_ref: f64,
+    /// Boundary hits since the last interaction.
+    bounces: u32,
+}
+
+impl Packet {
+    /// A packet entering the surface along +z with weight 1 − Rsp, at the origin or (random
+    /// entry) at a uniform point of the junction's period cell.
+    #[inline(always)]
+    fn launch(p: &Prepared, rng: &mut BatchRng) -> Packet {
+        let origin = match p.entry_cell_mm {
+            Some([px, py]) => [uniform(rng.next_u64()) * px, uniform(rng.next_u64()) * py],
+            None => [0.0, 0.0],
+        };
+        let w = 1.0 - p.rsp;
+        Packet {
+            origin,
+            pos: [origin[0], origin[1], 0.0],
+            u: [0.0f64, 0.0, 1.0],
+            w,
+            layer: 0usize,
+            scattered: false,
+            s_left: 0.0f64,
+            path: [0.0f64; MAX_LAYERS],
+            log_w_ref: w.ln(),
+            bounces: 0u32,
+        }
+    }
+
+    /// Position relative to the entry point.
+    #[inline(always)]
+    fn rel(&self) -> [f64; 3] {
+        [
+            self.pos[0] - self.origin[0],
+            self.pos[1] - self.origin[1],
+            self.pos[2],
+        ]
+    }
+
+    /// Moves `db` to the boundary ahead, spending optical depth at `coeff`.
+    #[inline(always)]
+    fn move_to_boundary<const WHITE: bool>(
+        &mut self,
+        db: f64,
+        coeff: f64,
+        mua_ref: &[f64; MAX_LAYERS],
+    ) {
+        let (pos, u) = (&mut self.pos, &self.u);
+        pos[0] += u[0] * db;
+        pos[1] += u[1] * db;
+        pos[2] += u[2] * db;
+        if WHITE {
+            self.path[self.layer] += db;
+            self.log_w_ref -= mua_ref[self.layer] * db;
+        }
+        if coeff > 0.0 {
+            self.s_left -= db * coeff;
+        }
+        self.bounces += 1;
+    }
+
+    /// Fresnel reflection or refraction at the planar top (`up`) or bottom of the layer.
+    /// Returns cos θ outside when the packet leaves the stack through it.
+    #[inline(always)]
+    fn cross_planar(&mut self, p: &Prepared, up: bool, rng: &mut BatchRng) -> Option<f64> {
+        let layer = self.layer;
+        let u = &mut self.u;
+        let (ni, nt) = (p.n[layer + 1], if up { p.n[layer] } else { p.n[layer + 2] });
+        self.pos[2] = if up { p.z[layer] } else { p.z[layer + 1] };
+        let (r, cos_t) = fresnel(ni, nt, u[2].abs());
+        if r > 0.0 && (r >= 1.0 || uniform(rng.next_u64()) <= r) {
+            u[2] = -u[2];
+            return None;
+        }
+        let k = ni / nt;
+        u[0] *= k;
+        u[1] *= k;
+        u[2] = if up { -cos_t } else { cos_t };
+        let escaped = if up { layer == 0 } else { layer + 1 == p.nl };
+        if escaped {
+            return Some(cos_t);
+        }
+        self.layer = if up { layer - 1 } else { layer + 1 };
+        None
+    }
+
+    /// Fresnel reflection or refraction at the junction J(x, y) (thesis Eq. 1), about its
+    /// local normal, then a step off the surface.
+    #[inline(always)]
+    fn cross_junction(&mut self, p: &Prepared, rng: &mut BatchRng) {
+        let (pos, u) = (&mut self.pos, &mut self.u);
+        let layer = self.layer;
+        let (ju, hf) = p.junction.as_ref().unwrap();
+        let other = if layer == *ju { ju + 1 } else { *ju };
+        let nv = hf.normal(pos[0], pos[1]);
+        let c = u[0] * nv[0] + u[1] * nv[1] + u[2] * nv[2];
+        let (ni, nt) = (p.n[layer + 1], p.n[other + 1]);
+        let cos_i = c.abs().min(1.0);
+        let (r, cos_t) = fresnel(ni, nt, cos_i);
+        if r > 0.0 && (r >= 1.0 || uniform(rng.next_u64()) <= r) {
+            for k in 0..3 {
+                u[k] -= 2.0 * c * nv[k];
+            }
+        } else {
+            let sg = c.signum();
+            let eta = ni / nt;
+            let a = cos_t - eta * cos_i;
+            let mut t = [0.0; 3];
+            for k in 0..3 {
+                t[k] = eta * u[k] + a * sg * nv[k];
+            }
+            let inv = 1.0 / (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+            *u = [t[0] * inv, t[1] * inv, t[2] * inv];
+            self.layer = other;
+        }
+        // Step off the surface so the next search starts on the right side.
+        for k in 0..3 {
+            pos[k] += u[k] * 1e-9;
+        }
+    }
+
+    /// Moves the whole `step` and interacts there: absorption (direct mode) or path length
+    /// (white mode), then a new direction. Returns whether the packet survives roulette.
+    #[inline(always)]
+    fn interact<const WHITE: bool, S: Scorer>(
+        &mut self,
+        p: &Prepared,
+        step: f64,
+        mua_ref: &[f64; MAX_LAYERS],
+        ln_roulette: f64,
+        rng: &mut BatchRng,
+        s: &mut S,
+    ) -> bool {
+        let layer = self.layer;
+        self.pos[0] += self.u[0] * step;
+        self.pos[1] += self.u[1] * step;
+        self.pos[2] += self.u[2] * step;
+        self.s_left = 0.0;
+        self.bounces = 0;
+        if WHITE {
+            self.path[layer] += step;
+            self.log_w_ref -= mua_ref[layer] * step;
+        } else {
+            let dw = self.w * p.absorb_frac[layer];
+            self.w -= dw;
+            s.absorb(layer, dw, &self.rel());
+        }
+        debug_assert!(self.w.is_finite());
+        spin(&mut self.u, p.g[layer], rng);
+        self.scattered = true;
+        self.roulette::<WHITE>(ln_roulette, rng)
+    }
+
+    /// Unbiased Russian roulette (MCML's WEIGHT and CHANCE) on the weight, or in white mode on
+    /// the weight under the reference absorption. Returns whether the packet survives.
+    #[inline(always)]
+    fn roulette<const WHITE: bool>(&mut self, ln_roulette: f64, rng: &mut BatchRng) -> bool {
+        if WHITE {
+            if self.log_w_ref < ln_roulette {
+                if uniform(rng.next_u64()) <= ROULETTE_CHANCE {
+                    self.w /= ROULETTE_CHANCE;
+                    self.log_w_ref -= ROULETTE_CHANCE.ln();
+                } else {
+                    return false;
+                }
+            }
+        } else if self.w < ROULETTE_WEIGHT {
+            if self.w > 0.0 && uniform(rng.next_u64()) <= ROULETTE_CHANCE {
+                self.w /= ROULETTE_CHANCE;
+            } else {
+                return false;
+            }
+        }
+        true
+    }
+}
+
 /// Traces one photon packet.
 ///
 /// `WHITE = false`: MCML's scheme. Free paths from μt, weight × albedo at each interaction, the
@@ -274,152 +463,60 @@ pub(crate) fn trace<const WHITE: bool, S: Scorer>(
     s: &mut S,
     events: &mut u64,
 ) {
-    let origin = match p.entry_cell_mm {
-        Some([px, py]) => [uniform(rng.next_u64()) * px, uniform(rng.next_u64()) * py],
-        None => [0.0, 0.0],
-    };
-    let mut pos = [origin[0], origin[1], 0.0];
-    let rel = |pos: &[f64; 3]| [pos[0] - origin[0], pos[1] - origin[1], pos[2]];
-    let mut u = [0.0f64, 0.0, 1.0];
-    let mut w = 1.0 - p.rsp;
-    let mut layer = 0usize;
-    let mut scattered = false;
-    let mut s_left = 0.0f64;
-    let mut path = [0.0f64; MAX_LAYERS];
-    let mut log_w_ref = w.ln();
+    let mut k = Packet::launch(p, rng);
     let ln_roulette = ROULETTE_WEIGHT.ln();
-    let mut bounces = 0u32;
     loop {
-        if s_left <= 0.0 {
-            s_left = -uniform(rng.next_u64()).ln();
+        if k.s_left <= 0.0 {
+            k.s_left = -uniform(rng.next_u64()).ln();
         }
+        let layer = k.layer;
         let coeff = if WHITE { p.mus[layer] } else { p.mut_[layer] };
-        let step = s_left
+        let step = k.s_left
             * if WHITE {
                 p.inv_mus[layer]
             } else {
                 p.inv_mut[layer]
             };
-        let (db, hit) = p.boundary(layer, &pos, &u, step);
+        let (db, hit) = p.boundary(layer, &k.pos, &k.u, step);
         if db.is_infinite() && step.is_infinite() {
             // Travelling parallel to the layers through a clear layer: it never arrives (MCML
             // kills such packets too).
-            s.lost(w);
+            s.lost(k.w);
             s.photon_done();
             return;
         }
         if db < step {
-            pos[0] += u[0] * db;
-            pos[1] += u[1] * db;
-            pos[2] += u[2] * db;
-            if WHITE {
-                path[layer] += db;
-                log_w_ref -= mua_ref[layer] * db;
-            }
-            if coeff > 0.0 {
-                s_left -= db * coeff;
-            }
-            bounces += 1;
-            if bounces > MAX_BOUNCES {
-                s.lost(w);
+            k.move_to_boundary::<WHITE>(db, coeff, mua_ref);
+            if k.bounces > MAX_BOUNCES {
+                s.lost(k.w);
                 s.photon_done();
                 return;
             }
             match hit {
                 Hit::Top | Hit::Bottom => {
                     let up = hit == Hit::Top;
-                    let (ni, nt) = (p.n[layer + 1], if up { p.n[layer] } else { p.n[layer + 2] });
-                    pos[2] = if up { p.z[layer] } else { p.z[layer + 1] };
-                    let (r, cos_t) = fresnel(ni, nt, u[2].abs());
-                    if r > 0.0 && (r >= 1.0 || uniform(rng.next_u64()) <= r) {
-                        u[2] = -u[2];
-                        continue;
-                    }
-                    let k = ni / nt;
-                    u[0] *= k;
-                    u[1] *= k;
-                    u[2] = if up { -cos_t } else { cos_t };
-                    let escaped = if up { layer == 0 } else { layer + 1 == p.nl };
-                    if escaped {
-                        s.escape(up, scattered, w, &rel(&pos), cos_t, &path[..p.nl]);
+                    if let Some(cos_t) = k.cross_planar(p, up, rng) {
+                        s.escape(up, k.scattered, k.w, &k.rel(), cos_t, &k.path[..p.nl]);
                         s.photon_done();
                         return;
                     }
-                    layer = if up { layer - 1 } else { layer + 1 };
                 }
-                Hit::Junction => {
-                    let (ju, hf) = p.junction.as_ref().unwrap();
-                    let other = if layer == *ju { ju + 1 } else { *ju };
-                    let nv = hf.normal(pos[0], pos[1]);
-                    let c = u[0] * nv[0] + u[1] * nv[1] + u[2] * nv[2];
-                    let (ni, nt) = (p.n[layer + 1], p.n[other + 1]);
-                    let cos_i = c.abs().min(1.0);
-                    let (r, cos_t) = fresnel(ni, nt, cos_i);
-                    if r > 0.0 && (r >= 1.0 || uniform(rng.next_u64()) <= r) {
-                        for k in 0..3 {
-                            u[k] -= 2.0 * c * nv[k];
-                        }
-                    } else {
-                        let sg = c.signum();
-                        let eta = ni / nt;
-                        let a = cos_t - eta * cos_i;
-                        let mut t = [0.0; 3];
-                        for k in 0..3 {
-                            t[k] = eta * u[k] + a * sg * nv[k];
-                        }
-                        let inv = 1.0 / (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
-                        u = [t[0] * inv, t[1] * inv, t[2] * inv];
-                        layer = other;
-                    }
-                    // Step off the surface so the next search starts on the right side.
-                    for k in 0..3 {
-                        pos[k] += u[k] * 1e-9;
-                    }
-                }
+                Hit::Junction => k.cross_junction(p, rng),
             }
         } else {
-            pos[0] += u[0] * step;
-            pos[1] += u[1] * step;
-            pos[2] += u[2] * step;
-            s_left = 0.0;
-            bounces = 0;
-            if WHITE {
-                path[layer] += step;
-                log_w_ref -= mua_ref[layer] * step;
-            } else {
-                let dw = w * p.absorb_frac[layer];
-                w -= dw;
-                s.absorb(layer, dw, &rel(&pos));
-            }
-            debug_assert!(w.is_finite());
-            spin(&mut u, p.g[layer], rng);
-            scattered = true;
+            let alive = k.interact::<WHITE, S>(p, step, mua_ref, ln_roulette, rng, s);
             *events += 1;
-            if WHITE {
-                if log_w_ref < ln_roulette {
-                    if uniform(rng.next_u64()) <= ROULETTE_CHANCE {
-                        w /= ROULETTE_CHANCE;
-                        log_w_ref -= ROULETTE_CHANCE.ln();
-                    } else {
-                        s.photon_done();
-                        return;
-                    }
-                }
-            } else if w < ROULETTE_WEIGHT {
-                if w > 0.0 && uniform(rng.next_u64()) <= ROULETTE_CHANCE {
-                    w /= ROULETTE_CHANCE;
-                } else {
-                    s.photon_done();
-                    return;
-                }
+            if !alive {
+                s.photon_done();
+                return;
             }
         }
     }
 }
 
-/// Scores a direct (absorbing) run into a [`Tally`].
+/// Scores a direct (absorbing) run into a [`RadialTally`].
 pub(crate) struct DirectScorer<'a> {
-    pub t: &'a mut Tally,
+    pub t: &'a mut RadialTally,
     pub absorbed: [f64; MAX_LAYERS],
     pub dr_mm: f64,
 }
@@ -479,21 +576,6 @@ pub(crate) fn run_batches<T: Send>(
         .num_threads(o.threads.unwrap_or(0))
         .build()?;
     let used = pool.current_num_threads();
-    let bar = if let Some(b) = &o.bar {
-        b.clone()
-    } else if o.progress {
-        indicatif::ProgressBar::new(photons)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    if o.bar.is_none() {
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} photons ({per_sec}, eta {eta})",
-            )
-            .expect("valid template"),
-        );
-    }
     let chunk = chunk_per_thread.max(1) * used as u64;
     let mut start = 0;
     while start < n_batches {
@@ -508,7 +590,7 @@ pub(crate) fn run_batches<T: Send>(
                     }
                     let n = batch_size.min(photons - b * batch_size);
                     let out = work(b, n);
-                    bar.inc(n);
+                    crate::progress::advance(&o.progress, n);
                     Some(out)
                 })
                 .collect()
@@ -518,9 +600,6 @@ pub(crate) fn run_batches<T: Send>(
         }
         outs.into_iter().flatten().for_each(&mut reduce);
         start = end;
-    }
-    if o.bar.is_none() {
-        bar.finish_and_clear();
     }
     Ok(used)
 }
@@ -532,13 +611,13 @@ pub fn run(stack: &Stack, o: &McOptions) -> anyhow::Result<McResult> {
     let nl = p.nl;
     let no_ref = [0.0; MAX_LAYERS];
     let t0 = Instant::now();
-    let mut total = Tally::new(nl, p.nr);
+    let mut total = RadialTally::new(nl, p.nr);
     let threads = run_batches(
         64,
         o,
         |b, n| {
             let mut rng = batch_rng(o.seed, b);
-            let mut t = Tally::new(nl, p.nr);
+            let mut t = RadialTally::new(nl, p.nr);
             let mut events = 0u64;
             {
                 let mut s = DirectScorer {

@@ -18,13 +18,12 @@ pub mod junction;
 pub mod mcml;
 pub mod phase;
 pub mod radial;
-pub mod rng;
 pub mod stack;
 pub mod tally;
 pub mod white;
 
 pub use engine::{run, McOptions};
 pub use radial::RadialBins;
-pub use stack::{Grid, Junction, Layer, Stack, StackError};
+pub use stack::{Junction, Layer, RadialGrid, Stack, StackError};
 pub use tally::McResult;
 pub use white::{run_white, run_white_sets, AbsorptionSet, SetTally, WhiteRun, WhiteSets};

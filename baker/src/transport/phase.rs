@@ -46,9 +46,9 @@ mod tests {
     fn sampler_matches_pdf_chi2() {
         use rand_core::Rng;
         for g in [0.0, 0.75, 0.9, -0.5] {
-            let mut rng = crate::transport::rng::batch_rng(7, 0);
+            let mut rng = crate::math::rng::batch_rng(7, 0);
             let samples: Vec<f64> = (0..200_000)
-                .map(|_| sample_hg(g, crate::transport::rng::uniform(rng.next_u64())))
+                .map(|_| sample_hg(g, crate::math::rng::uniform(rng.next_u64())))
                 .collect();
             chi2_test_1d(
                 &samples,

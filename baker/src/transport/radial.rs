@@ -75,14 +75,6 @@ impl RadialBins {
         *self.edges_mm.last().unwrap()
     }
 
-    /// Bin centres (r_k + r_{k+1})/2, mm; 2π·centre·width is the annulus area exactly.
-    pub fn centres_mm(&self) -> Vec<f64> {
-        self.edges_mm
-            .windows(2)
-            .map(|w| 0.5 * (w[0] + w[1]))
-            .collect()
-    }
-
     /// Annulus areas π(r_{k+1}² − r_k²), mm².
     pub fn areas_mm2(&self) -> Vec<f64> {
         self.edges_mm

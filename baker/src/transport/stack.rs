@@ -1,5 +1,7 @@
 //! The layer stack a transport run takes: plain numbers, validated once.
 
+use std::fmt;
+
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -30,16 +32,29 @@ pub struct Junction {
     pub phi_y_rad: f64,
 }
 
-/// Annular grid of the radial reflectance profile Rd(r).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Grid {
+/// Uniform annular grid of the radial reflectance profile Rd(r) of a direct run (MCML's `dr`,
+/// `nr`): `nr` annuli of width `dr_mm` from the beam. (Profiles with arbitrary edges use
+/// [`super::RadialBins`].)
+#[derive(Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RadialGrid {
     pub dr_mm: f64,
     pub nr: usize,
 }
 
-impl Default for Grid {
+/// Prints the type's former name `Grid`: skin cache keys hash the `Debug` rendering of a
+/// [`Stack`] (`pipeline::KeyBuilder::part`), and a rename must not change them.
+impl fmt::Debug for RadialGrid {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Grid")
+            .field("dr_mm", &self.dr_mm)
+            .field("nr", &self.nr)
+            .finish()
+    }
+}
+
+impl Default for RadialGrid {
     fn default() -> Self {
-        Grid {
+        RadialGrid {
             dr_mm: 0.01,
             nr: 500,
         }
@@ -53,7 +68,7 @@ pub struct Stack {
     pub n_below: f64,
     pub layers: Vec<Layer>,
     pub junction: Option<Junction>,
-    pub grid: Grid,
+    pub grid: RadialGrid,
 }
 
 #[derive(Debug, Error, PartialEq)]
@@ -209,7 +224,7 @@ pub struct StackFile {
     pub n_below: f64,
     pub layers: Vec<LayerFile>,
     #[serde(default)]
-    pub grid: Option<Grid>,
+    pub grid: Option<RadialGrid>,
     #[serde(default)]
     pub junction: Option<Junction>,
 }
@@ -295,6 +310,20 @@ pub fn from_skin(e: &formats::OpticsEntry, i: usize) -> Stack {
         n_below,
         layers,
         junction,
-        grid: Grid::default(),
+        grid: RadialGrid::default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Cache keys of skin bakes hash `format!("{stack:?}")`: the rendering must not change.
+    #[test]
+    fn radial_grid_debug_keeps_the_cache_key_rendering() {
+        assert_eq!(
+            format!("{:?}", RadialGrid::default()),
+            "Grid { dr_mm: 0.01, nr: 500 }"
+        );
     }
 }

@@ -4,9 +4,11 @@ use serde::Serialize;
 
 use crate::stats::Sums;
 
-/// Raw sums of one batch (or of a whole run once batches are merged in order).
+/// Raw sums of a direct (absorbing) run on a uniform radial grid: Rd, Rd(r) per annulus, the
+/// unscattered Rd, Tt and the absorption per layer, for one batch (or a whole run once
+/// batches are merged in order).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Tally {
+pub struct RadialTally {
     pub photons: u64,
     pub rd: Sums,
     pub rd_unscattered: Sums,
@@ -18,7 +20,7 @@ pub struct Tally {
     pub scattering_events: u64,
 }
 
-impl Tally {
+impl RadialTally {
     pub fn new(layers: usize, nr: usize) -> Self {
         Self {
             photons: 0,
@@ -32,7 +34,7 @@ impl Tally {
         }
     }
 
-    pub fn merge(&mut self, o: &Tally) {
+    pub fn merge(&mut self, o: &RadialTally) {
         self.photons += o.photons;
         self.rd.merge(&o.rd);
         self.rd_unscattered.merge(&o.rd_unscattered);
@@ -78,7 +80,7 @@ pub struct McResult {
 }
 
 impl McResult {
-    pub fn from_tally(t: &Tally, rsp: f64, dr_mm: f64, threads: usize, seconds: f64) -> Self {
+    pub fn from_tally(t: &RadialTally, rsp: f64, dr_mm: f64, threads: usize, seconds: f64) -> Self {
         let n = t.photons;
         let area = |i: usize| std::f64::consts::PI * dr_mm * dr_mm * (2 * i + 1) as f64;
         let rd_r: Vec<f64> = t

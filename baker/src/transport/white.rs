@@ -10,9 +10,9 @@ use std::time::Instant;
 
 use super::engine::{run_batches, trace, McOptions, Prepared, Scorer};
 use super::radial::RadialBins;
-use super::rng::batch_rng;
 use super::stack::{Stack, StackError, MAX_LAYERS};
-use super::tally::{McResult, Tally};
+use super::tally::{McResult, RadialTally};
+use crate::math::rng::batch_rng;
 use crate::stats::Sums;
 
 /// Per-layer absorption coefficients to apply to a white run, mm⁻¹.
@@ -143,7 +143,7 @@ impl WhiteRun {
     /// 1 − Rsp − Rd − Tt.
     pub fn apply(&self, mua_per_mm: &[f64]) -> McResult {
         assert_eq!(mua_per_mm.len(), self.layers, "one μa per layer");
-        let mut t = Tally::new(0, self.nr);
+        let mut t = RadialTally::new(0, self.nr);
         t.photons = self.photons;
         t.scattering_events = self.scattering_events;
         for (k, ((&exit, &r), &w0)) in self

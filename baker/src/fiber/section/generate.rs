@@ -13,7 +13,7 @@ use std::f64::consts::{PI, TAU};
 use rand_core::Rng;
 
 use super::{Polygon, Section, SectionError};
-use crate::transport::rng::{batch_rng, uniform, BatchRng};
+use crate::math::rng::{batch_rng, uniform, BatchRng};
 
 /// Vertices per generated outline: caustics are resolved to well under the 2° bins (the
 /// normal turns by at most 360°/256 ≈ 1.4° between vertices of a round outline, less on

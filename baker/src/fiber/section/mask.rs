@@ -26,15 +26,19 @@ pub struct MaskOptions {
     pub max_vertices: u64,
 }
 
+/// The largest mask image by default, pixels (4096²; a spec's `limits.mask_pixels`).
+pub const DEFAULT_MAX_PIXELS: u64 = 4096 * 4096;
+/// The largest outline by default, vertices (a spec's `limits.polygon_vertices`).
+pub const DEFAULT_MAX_VERTICES: u64 = 100_000;
+
 impl MaskOptions {
     pub fn new(um_per_px: f64) -> Self {
-        let l = crate::spec::Limits::default();
         Self {
             um_per_px,
             smoothing_passes: 4,
             min_hole_px: 4.0,
-            max_pixels: l.mask_pixels,
-            max_vertices: l.polygon_vertices,
+            max_pixels: DEFAULT_MAX_PIXELS,
+            max_vertices: DEFAULT_MAX_VERTICES,
         }
     }
 }

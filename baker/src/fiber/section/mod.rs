@@ -200,11 +200,6 @@ impl Section {
         }
     }
 
-    /// True for an exact circle (rotationally symmetric: one φi describes every direction).
-    pub fn is_circle(&self) -> bool {
-        matches!(self, Section::Conic { rx_um, ry_um } if rx_um == ry_um)
-    }
-
     /// Reads a polygon CSV: rows `x_um,y_um`; a blank line or a row `hole` starts a hole; `#`
     /// comments and a header row `x_um,y_um` (or `x,y`) are skipped. The outline is moved so
     /// that its area centroid is on the fiber axis. At most `max_vertices` vertices; every

@@ -1,0 +1,504 @@
+//! The bake of one fiber entry: its units through the cache, then its tables, previews and
+//! report.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::setup::{entry_setup, unit_id_key, EntrySetup};
+use super::tables::{file_attrs, Layout, TableOut};
+use crate::bake::destination::Destination;
+use crate::bake::job::Job;
+use crate::fiber::slices::{self as bake, incident_of_bin, unit_len, BakeSettings, Noise};
+use crate::fiber::Fiber;
+use crate::math::rng::coordinate_seed;
+use crate::output::{atomic, hdf5 as h5out};
+use crate::pipeline::Bar;
+use crate::spec::fiber::{FiberEntry, FiberSpec};
+use formats::bcsdf::{self, KIND};
+
+/// What one entry's bake measured (written to the manifest).
+#[derive(Debug, Serialize)]
+pub struct EntryReport {
+    pub name: String,
+    pub fiber_type: &'static str,
+    pub sections: u64,
+    pub symmetry: String,
+    pub stored_directions: usize,
+    pub full_directions: usize,
+    pub photons_per_direction: u64,
+    pub split: u32,
+    pub variants: Vec<String>,
+    pub channels: Vec<String>,
+    /// Wall-clock figures: in `timing.json`, not the (reproducible) manifest.
+    #[serde(skip)]
+    pub seconds: f64,
+    #[serde(skip)]
+    pub photons_per_s: f64,
+    /// Mean over stored directions of each slice's median / 90th-percentile per-bin relative
+    /// standard error (section 0).
+    pub noise: Noise,
+    /// Largest |Λ − 1|/SE over directions for undyed variants (0 when none is undyed).
+    pub albedo_min: f64,
+    pub albedo_max: f64,
+    pub bcsdf_bytes: u64,
+    pub hdf5_bytes: u64,
+}
+
+/// An entry's report and its files (path relative to the spec's output, description).
+pub type EntryOutputs = (EntryReport, Vec<(String, String)>);
+
+/// One entry of a fiber spec being baked.
+pub struct EntryBake<'a> {
+    pub job: &'a Job<'a>,
+    pub spec: &'a FiberSpec,
+    pub e: &'a FiberEntry,
+    pub st: &'a BakeSettings,
+    /// `<spec>/<entry>`, the prefix of its unit ids.
+    pub prefix: String,
+    pub setup: EntrySetup,
+    /// Index of the entry's first unit among the spec's units (sharding uses it).
+    pub first_unit: usize,
+}
+
+/// What the direction loop accumulates for the report.
+struct Tallies {
+    noise: (f64, f64, usize),
+    photons: u64,
+    /// Smallest and largest albedo of undyed variants.
+    albedo: (f64, f64),
+}
+
+impl Default for Tallies {
+    fn default() -> Tallies {
+        Tallies {
+            noise: (0.0, 0.0, 0),
+            photons: 0,
+            albedo: (f64::INFINITY, f64::NEG_INFINITY),
+        }
+    }
+}
+
+impl EntryBake<'_> {
+    fn n_units(&self) -> usize {
+        let n_wi = self.setup.stored.len();
+        n_wi.div_ceil(unit_len(n_wi))
+    }
+
+    /// The results of unit `u` (its stored directions, every section), from the cache or
+    /// traced; `None` if another shard owns it.
+    fn unit_results(
+        &self,
+        u: usize,
+        chunk: &[usize],
+        bar: Option<&dyn Bar>,
+    ) -> anyhow::Result<Option<Vec<Vec<bake::SliceResult>>>> {
+        let (s, st, runner) = (&self.setup, self.st, self.job.runner);
+        let (id, key) = unit_id_key(&self.prefix, chunk, &s.stored, &s.key_base);
+        let photons = (chunk.len() * s.fibers.len()) as u64 * st.photons;
+        let r = runner.unit(&id, key, Some(self.first_unit + u), photons, || {
+            Ok(chunk
+                .par_iter()
+                .map(|&i| {
+                    let b = s.stored[i];
+                    let inc = incident_of_bin(&s.grid, b / s.grid.n_phi, b % s.grid.n_phi);
+                    (0..s.fibers.len())
+                        .map(|k| {
+                            let seed = coordinate_seed(st.seed, &[s.seed_base, k as u64, b as u64]);
+                            let r = bake::trace_slice(
+                                &s.fibers[k],
+                                inc,
+                                &s.grid,
+                                &s.channels,
+                                st,
+                                seed,
+                                &runner.cancel,
+                            );
+                            if let Some(bar) = bar {
+                                bar.advance(1);
+                            }
+                            r
+                        })
+                        .collect::<Result<Vec<_>, _>>()
+                })
+                .collect::<Result<Vec<_>, _>>()?)
+        })?;
+        Ok(r)
+    }
+
+    /// A shard traces its units into the cache; `baker merge` writes the tables.
+    fn units_only(&self) -> anyhow::Result<()> {
+        let all: Vec<usize> = (0..self.setup.stored.len()).collect();
+        for (u, chunk) in all.chunks(unit_len(all.len())).enumerate() {
+            self.unit_results(u, chunk, None)?;
+        }
+        Ok(())
+    }
+}
+
+/// Bakes entry `e` into `out` (`None` for a shard); its units are numbered from
+/// `*unit_index`.
+pub fn bake_entry(
+    job: &Job,
+    spec: &FiberSpec,
+    e: &FiberEntry,
+    st: &BakeSettings,
+    unit_index: &mut usize,
+) -> anyhow::Result<Option<EntryOutputs>> {
+    let t0 = Instant::now();
+    let eb = EntryBake {
+        job,
+        spec,
+        e,
+        st,
+        prefix: format!("{}/{}", job.stem, e.name),
+        setup: entry_setup(e, st)?,
+        first_unit: *unit_index,
+    };
+    *unit_index += eb.n_units();
+    announce(&eb);
+    let Some(d) = job.out else {
+        eb.units_only()?;
+        return Ok(None);
+    };
+    let geo = Geometry::of(&eb);
+    let h5_path = d.staged.path(&format!("{0}/{0}.h5", e.name))?;
+    let mut tallies = Tallies::default();
+    let mut tables = Vec::new();
+    atomic::write_with(&h5_path, |tmp| -> anyhow::Result<()> {
+        tables = write_tables(&eb, &geo, tmp, &mut tallies)?;
+        Ok(())
+    })
+    .with_context(|| format!("writing {}", h5_path.display()))?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let (files, bcsdf_bytes) = write_outputs(&eb, d, &h5_path, tables)?;
+    let report = report(
+        &eb,
+        &tallies,
+        seconds,
+        bcsdf_bytes,
+        std::fs::metadata(&h5_path)?.len(),
+    );
+    job.runner.events.say(format!(
+        "  {}: {:.1} s, {:.2} M photons/s, noise median {:.2} % / p90 {:.2} %, .bcsdf {:.2} MB, .h5 {:.2} MB",
+        e.name,
+        seconds,
+        report.photons_per_s / 1e6,
+        100.0 * report.noise.median_rel_se,
+        100.0 * report.noise.p90_rel_se,
+        report.bcsdf_bytes as f64 / 1e6,
+        report.hdf5_bytes as f64 / 1e6
+    ));
+    Ok(Some((report, files)))
+}
+
+fn announce(eb: &EntryBake) {
+    let s = &eb.setup;
+    eb.job.runner.events.say(format!(
+        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons (split {}), {} variant(s) × {} channel(s)",
+        eb.e.name,
+        s.fibers.len(),
+        s.sym.describe(),
+        s.stored.len(),
+        s.grid.bins(),
+        eb.st.photons_per_direction(),
+        eb.st.split,
+        s.variants.len(),
+        s.channels.per_variant()
+    ));
+}
+
+/// The directions and projected widths the tables are laid out on.
+struct Geometry {
+    wi_deg: Vec<[f64; 2]>,
+    phi_centres: Vec<f64>,
+    /// Per section, then their average: projected width per φ bin, µm.
+    areas: Vec<Vec<f64>>,
+    table_names: Vec<String>,
+}
+
+impl Geometry {
+    fn of(eb: &EntryBake) -> Geometry {
+        let grid = &eb.setup.grid;
+        let wi_deg: Vec<[f64; 2]> = eb
+            .setup
+            .stored
+            .iter()
+            .map(|&b| {
+                let (it, jp) = (b / grid.n_phi, b % grid.n_phi);
+                [grid.theta_centre_deg(it), grid.phi_centre_deg(jp)]
+            })
+            .collect();
+        let phi_centres: Vec<f64> = (0..grid.n_phi).map(|j| grid.phi_centre_deg(j)).collect();
+        let area_of = |f: &Fiber| -> Vec<f64> {
+            phi_centres
+                .iter()
+                .map(|p| f.projected_width_um(p.to_radians()))
+                .collect()
+        };
+        let ns = eb.setup.fibers.len();
+        let mut areas: Vec<Vec<f64>> = eb.setup.fibers.iter().map(area_of).collect();
+        if ns > 1 {
+            let avg = (0..grid.n_phi)
+                .map(|j| areas.iter().map(|a| a[j]).sum::<f64>() / ns as f64)
+                .collect();
+            areas.push(avg);
+        }
+        let table_names = (0..ns)
+            .map(|s| format!("section-{s:02}"))
+            .chain((ns > 1).then(|| "average".to_string()))
+            .collect();
+        Geometry {
+            wi_deg,
+            phi_centres,
+            areas,
+            table_names,
+        }
+    }
+}
+
+/// Writes every table of the entry into the HDF5 file at `tmp` while the units run; returns
+/// each table's name and `.bcsdf` bytes.
+fn write_tables(
+    eb: &EntryBake,
+    geo: &Geometry,
+    tmp: &Path,
+    tallies: &mut Tallies,
+) -> anyhow::Result<Vec<(String, Vec<u8>)>> {
+    let (e, s, st) = (eb.e, &eb.setup, eb.st);
+    let file = h5out::create_file(tmp)?;
+    let symmetry = s.sym.describe();
+    file_attrs(
+        &file,
+        &[
+            ("format", KIND),
+            ("entry", &e.name),
+            ("fiber_type", e.fiber_type.name),
+            ("spec", &eb.spec.file),
+            ("symmetry", &symmetry),
+        ],
+    )?;
+    let layout = Layout {
+        grid: &s.grid,
+        st,
+        wi_deg: &geo.wi_deg,
+        map: &s.map,
+        variants: &s.channels.variants,
+        channels: &s.channels.channel_names,
+        phi_centres: &geo.phi_centres,
+    };
+    let mut outs = Vec::new();
+    for (t, name) in geo.table_names.iter().enumerate() {
+        let meta = table_metadata(eb, name, t);
+        outs.push(TableOut::create(
+            &file,
+            name,
+            &layout,
+            geo.areas[t].clone(),
+            meta,
+        )?);
+    }
+    trace_into(eb, &mut outs, tallies)?;
+    let tables = outs
+        .into_iter()
+        .map(|o| o.finish(&layout))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    file.close()?;
+    Ok(tables)
+}
+
+/// The directory metadata of table `t` (`name`) of the entry.
+fn table_metadata(eb: &EntryBake, name: &str, t: usize) -> serde_json::Value {
+    let (e, st) = (eb.e, eb.st);
+    let ns = eb.setup.fibers.len();
+    serde_json::json!({
+        "entry": e.name, "table": name, "fiber_type": e.fiber_type.name,
+        "spec": eb.spec.file, "diameter_um": e.diameter_um, "eta": e.eta,
+        "beta_deg": e.beta_deg, "cuticle": e.cuticle, "source": e.source,
+        "section_variant": (t < ns).then_some(t),
+        "symmetry": eb.setup.sym, "photons_per_direction": st.photons_per_direction(),
+        "split": st.split, "seed": st.seed, "lambda_nm": st.lambda_nm,
+        "channels": st.channels,
+        "spec_sha256": eb.spec.sha256, "baker_version": env!("CARGO_PKG_VERSION"),
+        "created_utc": crate::output::manifest::created_utc(),
+    })
+}
+
+/// Runs the entry's units in order and pushes every stored direction into the tables (the
+/// sections, then their average weighted by the power each intercepts).
+fn trace_into(eb: &EntryBake, outs: &mut [TableOut], tallies: &mut Tallies) -> anyhow::Result<()> {
+    let (s, runner) = (&eb.setup, eb.job.runner);
+    let (ns, n_wi) = (s.fibers.len(), s.stored.len());
+    let nc = s.channels.per_variant();
+    let bar = runner.events.bar((n_wi * ns) as u64, &eb.e.name);
+    let mut done = 0usize;
+    let t_trace = Instant::now();
+    let all: Vec<usize> = (0..n_wi).collect();
+    for (u, chunk) in all.chunks(unit_len(n_wi)).enumerate() {
+        let results = eb
+            .unit_results(u, chunk, bar.as_deref())?
+            .ok_or_else(|| anyhow::anyhow!("unit {} of {} is not available", u, eb.e.name))?;
+        if let Some(bar) = &bar {
+            bar.set_position(((done + chunk.len()) * ns) as u64);
+        }
+        for (&i, res) in chunk.iter().zip(results) {
+            // Encoding and writing a direction of a wide sweep takes a while: a signal
+            // stops here too (the HDF5 file being written is dropped).
+            runner.cancel.check()?;
+            tallies.photons += res.iter().map(|r| r.launched).sum::<u64>();
+            tallies.noise.0 += res[0].noise.median_rel_se;
+            tallies.noise.1 += res[0].noise.p90_rel_se;
+            tallies.noise.2 += 1;
+            let all = with_average(eb, s.stored[i], res);
+            for (o, r) in outs.iter_mut().zip(&all) {
+                o.push(i, r, &s.grid)?;
+                for (v, &al) in r.albedo.iter().enumerate() {
+                    if eb.e.variants[v / nc].is_none() {
+                        tallies.albedo.0 = tallies.albedo.0.min(al);
+                        tallies.albedo.1 = tallies.albedo.1.max(al);
+                    }
+                }
+            }
+        }
+        done += chunk.len();
+        if bar.is_none() {
+            let step = (n_wi / 10).max(1);
+            if done % step < chunk.len() || done == n_wi {
+                let el = t_trace.elapsed().as_secs_f64();
+                runner.events.say(format!(
+                    "  {}: {done}/{n_wi} directions, {el:.0} s elapsed, eta {:.0} s",
+                    eb.e.name,
+                    el / done as f64 * (n_wi - done) as f64
+                ));
+            }
+        }
+    }
+    if let Some(b) = &bar {
+        b.finish();
+    }
+    Ok(())
+}
+
+/// The sections' slices of stored bin `b`, and with several sections their average weighted
+/// by the power each intercepts, ∝ W(φi).
+fn with_average(eb: &EntryBake, b: usize, res: Vec<bake::SliceResult>) -> Vec<bake::SliceResult> {
+    let (s, st) = (&eb.setup, eb.st);
+    let mut all = res;
+    if s.fibers.len() > 1 {
+        let bins = s.grid.bins();
+        // φi of the bin's centre, summed as the tables were first baked (j·res + res/2, not
+        // the grid's (j + ½)·res, which can differ in the last bit): the weights, and so the
+        // average's bytes, stay those of every earlier bake.
+        let phi_i =
+            (-180.0 + (b % s.grid.n_phi) as f64 * st.res_deg + 0.5 * st.res_deg).to_radians();
+        let w: Vec<f64> = s
+            .fibers
+            .iter()
+            .map(|f| f.projected_width_um(phi_i))
+            .collect();
+        let wt: f64 = w.iter().sum();
+        let mut avg = all[0].clone();
+        for (k, x) in avg.fraction.iter_mut().enumerate() {
+            *x = all
+                .iter()
+                .zip(&w)
+                .map(|(r, w)| w * r.fraction[k])
+                .sum::<f64>()
+                / wt;
+        }
+        for c in 0..avg.albedo.len() {
+            avg.albedo[c] = avg.fraction[c * bins..(c + 1) * bins].iter().sum();
+            avg.albedo_se[c] = all
+                .iter()
+                .zip(&w)
+                .map(|(r, w)| (w / wt * r.albedo_se[c]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+        }
+        all.push(avg);
+    }
+    all
+}
+
+/// The `.bcsdf` files and previews of the entry; returns the files (relative path,
+/// description) and the tables' total bytes.
+fn write_outputs(
+    eb: &EntryBake,
+    d: &Destination,
+    h5_path: &Path,
+    tables: Vec<(String, Vec<u8>)>,
+) -> anyhow::Result<(Vec<(String, String)>, u64)> {
+    let e = eb.e;
+    let dir = d.staged.dir();
+    let rel = |p: &Path| -> String {
+        p.strip_prefix(dir)
+            .unwrap_or(p)
+            .to_string_lossy()
+            .replace('\\', "/")
+    };
+    let mut files = Vec::new();
+    let mut bcsdf_bytes = 0u64;
+    let mut first_table: Option<PathBuf> = None;
+    for (name, bytes) in tables {
+        let p = d
+            .staged
+            .path(&format!("{}/{name}.{}", e.name, bcsdf::EXTENSION))?;
+        atomic::write(&p, &bytes).with_context(|| format!("writing {}", p.display()))?;
+        bcsdf_bytes += bytes.len() as u64;
+        files.push((rel(&p), format!("BCSDF table {name} of {}", e.name)));
+        if first_table.is_none() || name == "average" {
+            first_table = Some(p);
+        }
+    }
+    files.push((rel(h5_path), format!("HDF5 tables of {}", e.name)));
+    eb.job.runner.cancel.check()?;
+    let previews = super::preview::write_previews(
+        &d.staged,
+        &e.name,
+        first_table.as_deref().unwrap(),
+        &eb.st.lambda_nm,
+    )?;
+    for p in previews {
+        files.push((rel(&p), format!("preview slices of {}", e.name)));
+    }
+    Ok((files, bcsdf_bytes))
+}
+
+fn report(
+    eb: &EntryBake,
+    t: &Tallies,
+    seconds: f64,
+    bcsdf_bytes: u64,
+    hdf5_bytes: u64,
+) -> EntryReport {
+    let (e, s, st) = (eb.e, &eb.setup, eb.st);
+    let n = t.noise.2.max(1) as f64;
+    let finite_or_0 = |x: f64| if x.is_finite() { x } else { 0.0 };
+    let (albedo_min, albedo_max) = (finite_or_0(t.albedo.0), finite_or_0(t.albedo.1));
+    EntryReport {
+        name: e.name.clone(),
+        fiber_type: e.fiber_type.name,
+        sections: e.sections,
+        symmetry: s.sym.describe(),
+        stored_directions: s.stored.len(),
+        full_directions: s.grid.bins(),
+        photons_per_direction: st.photons_per_direction(),
+        split: st.split,
+        variants: s.channels.variants.clone(),
+        channels: s.channels.channel_names.clone(),
+        seconds,
+        photons_per_s: t.photons as f64 / seconds,
+        noise: Noise {
+            median_rel_se: t.noise.0 / n,
+            p90_rel_se: t.noise.1 / n,
+            bins: 0,
+        },
+        albedo_min,
+        albedo_max,
+        bcsdf_bytes,
+        hdf5_bytes,
+    }
+}

@@ -1,0 +1,116 @@
+//! The bake of a fiber spec: every entry's 4D BCSDF tables (thesis §5.3.2, §5.5).
+//!
+//! Into `OUT/<spec stem>/`:
+//! - `<entry>/section-NN.bcsdf`, one per seeded cross-section, and `<entry>/average.bcsdf`
+//!   (projected-area weighted average, Fig. 64) when there are several: the streaming tables
+//!   (layout in formats/FORMAT.md and `formats::bcsdf`);
+//! - `<entry>/<entry>.h5`: the same numbers, one group per table, chunked per incoming
+//!   direction, shuffle + deflate, axes as dimension scales, plus the sampling CDFs;
+//! - `preview/<entry>.png` (false-colour log slices, θi ∈ {0°, −45°, −80°} × fiber rotations
+//!   φi ∈ {0°, 30°, 60°, 90°}) and `preview/<entry>.exr` (linear RGB f in sr⁻¹, same grid);
+//! - `manifest.json`: settings, symmetry, noise, sizes and SHA-256 of every file, and
+//!   `timing.json`.
+
+mod entry;
+mod preview;
+mod setup;
+mod tables;
+
+use std::time::Instant;
+
+pub use entry::EntryReport;
+use setup::entry_setup;
+
+use super::manifest::{self, Kind, Manifest, Timing};
+use crate::bake::job::Job;
+use crate::fiber::slices::{unit_len, BakeSettings};
+use crate::files::Shown;
+use crate::output::manifest::file_entry;
+use crate::pipeline::{Cache, UnitInfo};
+use crate::spec::fiber::{FiberEntry, FiberSpec};
+
+/// Bakes every selected entry of a fiber spec into the job's destination (`None` for a
+/// shard: units only).
+pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
+    let t0 = Instant::now();
+    let a = job.req;
+    let selected = || spec.fibers.iter().filter(|e| a.selects(&e.name));
+    job.runner.events.emit(
+        serde_json::json!({"event": "bake_started", "spec": job.path,
+        "kind": "fiber", "entries": selected().count()}),
+    );
+    let mut settings = spec.bake.clone();
+    if let Some(p) = a.photons {
+        settings.photons = p;
+    }
+    let mut reports = Vec::new();
+    let mut files = Vec::new();
+    let mut timing = Vec::new();
+    // Work units are numbered across the spec's entries (sharding uses the number).
+    let mut unit_index = 0usize;
+    for e in selected() {
+        if let Some((r, f)) = entry::bake_entry(job, spec, e, &settings, &mut unit_index)? {
+            timing.push(serde_json::json!({"entry": r.name, "seconds": r.seconds,
+                "photons_per_s": r.photons_per_s}));
+            reports.push(r);
+            files.extend(f);
+        }
+    }
+    let Some(d) = job.out else {
+        return Ok(());
+    };
+    let dir = d.staged.dir();
+    let m = Manifest {
+        kind: Kind::Fiber,
+        spec_file: spec.file.clone(),
+        spec_sha256: spec.sha256.clone(),
+        settings: serde_json::to_value(&settings)?,
+        entries: serde_json::to_value(&reports)?,
+        files: files
+            .iter()
+            .map(|(rel, desc)| file_entry(dir, rel, desc))
+            .collect::<anyhow::Result<_>>()?,
+        warnings: vec![],
+    };
+    let t = Timing {
+        seconds: t0.elapsed().as_secs_f64(),
+        phases: vec![],
+        entries: timing,
+    };
+    manifest::write(job, m, t)?;
+    job.runner.events.say(format!(
+        "baked {}: {} fibers → {} ({:.1} s)",
+        job.path.display(),
+        reports.len(),
+        Shown(d.staged.target()),
+        t0.elapsed().as_secs_f64()
+    ));
+    Ok(())
+}
+
+/// `baker plan`: the entry's units, numbered from `*unit_index`.
+pub fn plan_entry(
+    stem: &str,
+    e: &FiberEntry,
+    st: &BakeSettings,
+    cache: &Cache,
+    unit_index: &mut usize,
+) -> anyhow::Result<Vec<UnitInfo>> {
+    let setup = entry_setup(e, st)?;
+    let n_wi = setup.stored.len();
+    let all: Vec<usize> = (0..n_wi).collect();
+    let mut out = Vec::new();
+    for chunk in all.chunks(unit_len(n_wi)) {
+        let prefix = format!("{stem}/{}", e.name);
+        let (id, key) = setup::unit_id_key(&prefix, chunk, &setup.stored, &setup.key_base);
+        out.push(UnitInfo {
+            id,
+            key: key.hex(),
+            index: Some(*unit_index),
+            photons: (chunk.len() * setup.fibers.len()) as u64 * st.photons,
+            cached: cache.path(&key).exists(),
+        });
+        *unit_index += 1;
+    }
+    Ok(out)
+}

@@ -1,0 +1,93 @@
+//! What a fiber entry's work units are made of, and their ids and keys.
+
+use crate::fiber::slices::BakeSettings;
+use crate::fiber::sweep::{Channels, Variant};
+use crate::fiber::symmetry::Symmetry;
+use crate::fiber::{AngularGrid, Fiber};
+use crate::math::rng::fnv1a;
+use crate::pipeline::KeyBuilder;
+use crate::spec::fiber::FiberEntry;
+
+/// The variants of an entry as μa spectra.
+pub fn variants_of(e: &FiberEntry, lambda_nm: &[f64]) -> Vec<Variant> {
+    e.variants
+        .iter()
+        .map(|v| Variant {
+            name: FiberEntry::variant_name(v.as_ref()),
+            mua_per_um: lambda_nm
+                .iter()
+                .map(|&l| e.variant_mua_per_um(v.as_ref(), l))
+                .collect(),
+        })
+        .collect()
+}
+
+/// Typical longest path worth tabulating: 16 bounding diameters.
+pub fn typical_path_um(f: &Fiber) -> f64 {
+    let s = f.cuticle_slope().map_or(1.0, |c| c.1);
+    32.0 * f.section.bound_radius_um() * s
+}
+
+/// What an entry's units are made of: the grid, the sections, the stored directions, the
+/// channels, and the digest of everything a unit's result depends on besides its directions
+/// (pipeline::KeyBuilder).
+pub struct EntrySetup {
+    pub grid: AngularGrid,
+    pub fibers: Vec<Fiber>,
+    pub sym: Symmetry,
+    pub stored: Vec<usize>,
+    pub map: Vec<u32>,
+    pub variants: Vec<Variant>,
+    pub channels: Channels,
+    pub seed_base: u64,
+    pub key_base: [u8; 32],
+}
+
+/// The setup of entry `e` from what the resolver built (its sections and symmetries).
+pub fn entry_setup(e: &FiberEntry, st: &BakeSettings) -> anyhow::Result<EntrySetup> {
+    let grid = AngularGrid::new(st.res_deg).map_err(anyhow::Error::msg)?;
+    let fibers: Vec<Fiber> = e
+        .population
+        .iter()
+        .map(|s| e.fiber_with(s.clone()))
+        .collect();
+    let sym = e.symmetries;
+    let (stored, map) = sym.wi_map(grid.n_theta, grid.n_phi, st.res_deg);
+    let variants = variants_of(e, &st.lambda_nm);
+    let channels = Channels::new(
+        &variants,
+        &st.lambda_nm,
+        st.channels,
+        typical_path_um(&fibers[0]),
+    );
+    let seed_base = fnv1a(&e.name);
+    let key_base =
+        crate::pipeline::digest_of(&(&fibers, &channels, st, seed_base, grid.n_theta, grid.n_phi));
+    Ok(EntrySetup {
+        grid,
+        fibers,
+        sym,
+        stored,
+        map,
+        variants,
+        channels,
+        seed_base,
+        key_base,
+    })
+}
+
+/// Id (`<spec>/<entry>/wi<first>-<last>`) and key of the unit of stored directions `chunk`.
+pub fn unit_id_key(
+    prefix: &str,
+    chunk: &[usize],
+    stored: &[usize],
+    key_base: &[u8; 32],
+) -> (String, crate::pipeline::Key) {
+    let bins: Vec<usize> = chunk.iter().map(|&i| stored[i]).collect();
+    let key = KeyBuilder::new("fiber-slices", crate::data::checksum())
+        .digest("entry", key_base)
+        .part("bins", &bins)
+        .finish();
+    let id = format!("{prefix}/wi{}-{}", chunk[0], chunk[chunk.len() - 1]);
+    (id, key)
+}

@@ -1,0 +1,231 @@
+//! The tables of one fiber entry being written: per table (each cross-section, and their
+//! average) a streaming `.bcsdf` writer and a group of the entry's HDF5 file, filled one
+//! incoming direction at a time (layout: formats/FORMAT.md, "Fiber BCSDF tables").
+
+use hdf5_metno as h5;
+use ndarray::{s, ArrayView3, ArrayView4, ArrayView5};
+
+use crate::fiber::slices::{BakeSettings, SliceResult};
+use crate::fiber::AngularGrid;
+use crate::output::hdf5 as h5out;
+use formats::bcsdf::{self, Directory, Writer, KIND};
+
+/// The shape of an entry's tables and what every table's directory holds.
+pub struct Layout<'a> {
+    pub grid: &'a AngularGrid,
+    pub st: &'a BakeSettings,
+    /// Stored incoming directions, (θi, φi) in degrees.
+    pub wi_deg: &'a [[f64; 2]],
+    /// Full grid → stored direction (and flips).
+    pub map: &'a [u32],
+    pub variants: &'a [String],
+    /// Channel names of one variant.
+    pub channels: &'a [String],
+    /// Bin centres of φ (and Δφ), degrees.
+    pub phi_centres: &'a [f64],
+}
+
+impl Layout<'_> {
+    fn n_wi(&self) -> usize {
+        self.wi_deg.len()
+    }
+}
+
+/// One table being written: streaming file and HDF5 group.
+pub struct TableOut {
+    pub name: String,
+    writer: Writer,
+    f: h5::Dataset,
+    cdf_theta: h5::Dataset,
+    cdf_phi: h5::Dataset,
+    albedo: Vec<f32>,
+    albedo_se: Vec<f32>,
+    group: h5::Group,
+}
+
+/// Writes the file-level attributes of an entry's HDF5 file.
+pub fn file_attrs(file: &h5::File, attrs: &[(&str, &str)]) -> anyhow::Result<()> {
+    for (k, v) in attrs {
+        h5out::text_attr(file, k, v)?;
+    }
+    h5out::text_attr(
+        file,
+        "description",
+        "Tabulated fiber BCSDFs (Aliaga et al. 2017 / thesis ch. 5). f = albedo * f_normalised, \
+         sr^-1; fiber axis +z, theta = asin(w.z), phi = atan2(w.y, w.x), dphi = phi_o - phi_i. \
+         Layout: formats/FORMAT.md, section 'Fiber BCSDF tables'.",
+    )
+}
+
+impl TableOut {
+    /// Table `name` with its directory: the group, its chunked datasets and the writer.
+    pub fn create(
+        file: &h5::File,
+        name: &str,
+        l: &Layout,
+        area_um: Vec<f64>,
+        metadata: serde_json::Value,
+    ) -> anyhow::Result<TableOut> {
+        let (grid, st) = (l.grid, l.st);
+        let dir_t = Directory {
+            kind: KIND.into(),
+            res_deg: st.res_deg,
+            n_theta: grid.n_theta,
+            n_phi: grid.n_phi,
+            wi_deg: l.wi_deg.to_vec(),
+            wi_map: l.map.to_vec(),
+            variants: l.variants.to_vec(),
+            channels: l.channels.to_vec(),
+            dtype: st.precision,
+            keep_bits: st.keep_bits,
+            scale: vec![],
+            albedo: vec![],
+            albedo_se: vec![],
+            area_um,
+            chunks: vec![],
+            metadata,
+        };
+        let (n_wi, nv, nc) = (l.n_wi(), l.variants.len(), l.channels.len());
+        let (nt, np) = (grid.n_theta, grid.n_phi);
+        let g = h5out::group(file, name)?;
+        let f = h5out::chunked::<f32>(
+            &g,
+            "f_normalised",
+            &[n_wi, nv, nc, nt, np],
+            &[1, nv, nc, nt, np],
+        )?;
+        h5out::text_attr(&f, "units", "sr^-1")?;
+        h5out::text_attr(&f, "description", "BCSDF normalised to one per incoming direction (sum of f * solid angle = 1); decoded values of the .bcsdf file")?;
+        let cdf_theta = h5out::chunked::<f32>(&g, "cdf_theta", &[n_wi, nv, nt], &[1, nv, nt])?;
+        h5out::text_attr(
+            &cdf_theta,
+            "description",
+            "sampling CDF over theta_o rows (density = mean of channels)",
+        )?;
+        let cdf_phi = h5out::chunked::<f32>(&g, "cdf_phi", &[n_wi, nv, nt, np], &[1, nv, nt, np])?;
+        h5out::text_attr(
+            &cdf_phi,
+            "description",
+            "sampling CDF over dphi within each theta_o row",
+        )?;
+        Ok(TableOut {
+            name: name.to_string(),
+            writer: Writer::new(dir_t, st.zstd_level),
+            f,
+            cdf_theta,
+            cdf_phi,
+            albedo: Vec::new(),
+            albedo_se: Vec::new(),
+            group: g,
+        })
+    }
+
+    /// Stored direction `i`'s slice: encoded into the stream, decoded values and sampling
+    /// CDFs into the HDF5 group.
+    pub fn push(&mut self, i: usize, r: &SliceResult, grid: &AngularGrid) -> anyhow::Result<()> {
+        let (nt, np) = (grid.n_theta, grid.n_phi);
+        let (nv, nc) = (
+            self.writer.dir.variants.len(),
+            self.writer.dir.channels.len(),
+        );
+        let decoded = self.writer.push(&r.normalised(grid))?;
+        self.albedo.extend(r.albedo.iter().map(|&x| x as f32));
+        self.albedo_se.extend(r.albedo_se.iter().map(|&x| x as f32));
+        let view = ArrayView5::from_shape((1, nv, nc, nt, np), &decoded)?;
+        self.f.write_slice(view, s![i..i + 1, .., .., .., ..])?;
+        let (ct, cp, _) = bcsdf::sampling_cdfs(&self.writer.dir, &decoded);
+        let ct: Vec<f32> = ct.iter().flatten().map(|&x| x as f32).collect();
+        let cp: Vec<f32> = cp.iter().flatten().map(|&x| x as f32).collect();
+        self.cdf_theta.write_slice(
+            ArrayView3::from_shape((1, nv, nt), &ct)?,
+            s![i..i + 1, .., ..],
+        )?;
+        self.cdf_phi.write_slice(
+            ArrayView4::from_shape((1, nv, nt, np), &cp)?,
+            s![i..i + 1, .., .., ..],
+        )?;
+        Ok(())
+    }
+
+    /// The axes, albedo, area and map datasets with their scales; then the streaming file's
+    /// bytes.
+    pub fn finish(mut self, l: &Layout) -> anyhow::Result<(String, Vec<u8>)> {
+        let grid = l.grid;
+        let (n_wi, nv, nc) = (l.n_wi(), l.variants.len(), l.channels.len());
+        let g = &self.group;
+        let albedo = h5out::array(g, "albedo", &[n_wi, nv, nc], &self.albedo)?;
+        h5out::text_attr(
+            &albedo,
+            "description",
+            "directional albedo Lambda(w_i): fraction of the intercepted power that leaves",
+        )?;
+        let albedo_se = h5out::array(g, "albedo_se", &[n_wi, nv, nc], &self.albedo_se)?;
+        let area = h5out::array(g, "area_um", &[grid.n_phi], &self.writer.dir.area_um)?;
+        h5out::text_attr(&area, "units", "um")?;
+        h5out::text_attr(&area, "description", "projected width per unit length seen from azimuth phi (A(w) of Eq. 17 before sin(w, w_f))")?;
+        let wmap = h5out::array(g, "wi_map", &[grid.n_theta, grid.n_phi], l.map)?;
+        h5out::text_attr(&wmap, "description", "full (theta_i, phi_i) grid -> stored index | 2^31 (theta_o flips sign) | 2^30 (dphi flips sign)")?;
+        let th_i = h5out::array(
+            g,
+            "theta_i_deg",
+            &[n_wi],
+            &l.wi_deg.iter().map(|w| w[0]).collect::<Vec<_>>(),
+        )?;
+        let ph_i = h5out::array(
+            g,
+            "phi_i_deg",
+            &[n_wi],
+            &l.wi_deg.iter().map(|w| w[1]).collect::<Vec<_>>(),
+        )?;
+        let theta_o: Vec<f64> = (0..grid.n_theta)
+            .map(|i| grid.theta_centre_deg(i))
+            .collect();
+        let th_o = h5out::array(g, "theta_o_deg", &[grid.n_theta], &theta_o)?;
+        let dphi = h5out::array(g, "dphi_deg", &[grid.n_phi], l.phi_centres)?;
+        let phi = h5out::array(g, "phi_deg", &[grid.n_phi], l.phi_centres)?;
+        let var = h5out::strings(g, "variant", l.variants)?;
+        let ch = h5out::strings(g, "channel", l.channels)?;
+        let (f, ct, cp) = (&self.f, &self.cdf_theta, &self.cdf_phi);
+        for (d, u) in [
+            (&th_i, "degree"),
+            (&ph_i, "degree"),
+            (&th_o, "degree"),
+            (&dphi, "degree"),
+            (&phi, "degree"),
+            (&albedo, "1"),
+            (&albedo_se, "1"),
+            (ct, "1"),
+            (cp, "1"),
+            (&wmap, "1"),
+        ] {
+            h5out::text_attr(d, "units", u)?;
+        }
+        h5out::attach_scale(
+            &th_i,
+            "theta_i_deg",
+            &[(f, 0), (&albedo, 0), (&albedo_se, 0), (ct, 0), (cp, 0)],
+        )?;
+        h5out::attach_scale(
+            &ph_i,
+            "phi_i_deg",
+            &[(f, 0), (&albedo, 0), (&albedo_se, 0), (ct, 0), (cp, 0)],
+        )?;
+        h5out::attach_scale(
+            &var,
+            "variant",
+            &[(f, 1), (&albedo, 1), (&albedo_se, 1), (ct, 1), (cp, 1)],
+        )?;
+        h5out::attach_scale(&ch, "channel", &[(f, 2), (&albedo, 2), (&albedo_se, 2)])?;
+        h5out::attach_scale(
+            &th_o,
+            "theta_o_deg",
+            &[(f, 3), (ct, 2), (cp, 2), (&wmap, 0)],
+        )?;
+        h5out::attach_scale(&dphi, "dphi_deg", &[(f, 4), (cp, 3)])?;
+        h5out::attach_scale(&phi, "phi_deg", &[(&area, 0), (&wmap, 1)])?;
+        self.writer.dir.albedo = std::mem::take(&mut self.albedo);
+        self.writer.dir.albedo_se = std::mem::take(&mut self.albedo_se);
+        let bytes = self.writer.finish()?;
+        Ok((self.name, bytes))
+    }
+}

@@ -1,0 +1,33 @@
+//! `baker merge`: shard directories into the tables one bake would write.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use super::observer::{ProgressMode, Terminal};
+
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Shard directories written by `baker bake … --shard I/N --out DIR`.
+    #[arg(required = true)]
+    pub shards: Vec<PathBuf>,
+    /// Output root (as `baker bake --out`).
+    #[arg(short = 'o', long = "out", default_value = "out")]
+    pub out: PathBuf,
+    /// Progress (as `baker bake --progress`).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub progress: ProgressMode,
+    #[arg(long, short)]
+    pub quiet: bool,
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+pub fn run(m: MergeArgs) -> anyhow::Result<()> {
+    crate::bake::merge::merge(
+        &m.shards,
+        &m.out,
+        m.threads,
+        Terminal::events(m.progress, m.quiet),
+    )
+}

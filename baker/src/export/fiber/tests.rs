@@ -1,0 +1,91 @@
+//! The fiber writers, and fits of tables named in the environment.
+
+use serde_json::json;
+
+use super::summary::summary;
+use super::*;
+use crate::export::chiang::{ChiangParams, FitReport};
+
+fn fit() -> FiberFit {
+    let params = ChiangParams {
+        eta: 1.635,
+        sigma_a: vec![0.1, 0.5, 2.0],
+        beta_m: 0.2,
+        beta_n: 0.35,
+        alpha_deg: -2.5,
+    };
+    FiberFit {
+        table: "t.bcsdf".into(),
+        variant: "disperse_red_1@1%".into(),
+        channels: vec!["R".into(), "G".into(), "B".into()],
+        metadata: json!({"diameter_um": 10.0}),
+        report: FitReport {
+            params: params.clone(),
+            eta_fixed: true,
+            rel_l1: 0.2,
+            rel_l2: 0.3,
+            rel_l1_per_channel: vec![0.2; 3],
+            rel_l2_per_channel: vec![0.3; 3],
+            albedo_table: vec![0.9, 0.5, 0.4],
+            albedo_model: vec![0.88, 0.52, 0.41],
+            theta_i_deg: vec![-30.0, 30.0],
+            phi_i_deg: vec![0.0],
+            evaluations: 1,
+        },
+        noise_l1: Some(0.05),
+        tests: vec![],
+    }
+}
+
+#[test]
+fn writers_carry_the_parameters_in_each_engines_units() {
+    let f = fit();
+    let x = write_mitsuba(&f);
+    assert!(x.contains("<bsdf type=\"hair\" id=\"hair_disperse_red_1_1_\">"));
+    assert!(x.contains("<float name=\"scale_tilt\" value=\"-2.500000\"/>"));
+    assert!(x.contains("<rgb name=\"sigma_a\" value=\"0.100000, 0.500000, 2.000000\"/>"));
+    // No "--" inside XML comments.
+    let comments: Vec<&str> = x.split("<!--").skip(1).collect();
+    assert!(comments
+        .iter()
+        .all(|c| !c.split("-->").next().unwrap().contains("--")));
+    let p = write_pbrt(&f);
+    assert!(p.contains("\"rgb sigma_a\" [ 0.100000 0.500000 2.000000 ]"));
+    assert!(p.contains("\"float alpha\" [ -2.500000 ]"));
+    let b = write_blender(&f);
+    assert!(b.contains(&format!("OFFSET_RAD = {:.8}", 2.5f64.to_radians())));
+    let j: serde_json::Value = serde_json::from_str(&write_chiang(&f)).unwrap();
+    assert_eq!(j["parameters"]["beta_n"], 0.35);
+    let mua = j["parameters"]["mua_per_mm"][2].as_f64().unwrap();
+    assert!((mua - 2.0 / 0.005).abs() < 1e-9);
+}
+
+/// Fits the tables listed in `BAKER_HAIR_TABLES` (`:`-separated) and prints the result:
+/// `BAKER_HAIR_TABLES=a.bcsdf:b.bcsdf cargo test -p baker --lib fit_listed -- --ignored
+/// --nocapture`.
+#[test]
+#[ignore]
+fn fit_listed_tables() {
+    let list = std::env::var("BAKER_HAIR_TABLES").unwrap_or_default();
+    for path in list.split(':').filter(|p| !p.is_empty()) {
+        let t = Bcsdf::open(path).unwrap();
+        for v in 0..t.dir.variants.len() {
+            let start = std::time::Instant::now();
+            let f = fit_table(&t, v, path).unwrap();
+            eprintln!("{:.1} s", start.elapsed().as_secs_f64());
+            for line in summary(&f) {
+                eprintln!("  {line}");
+            }
+        }
+    }
+}
+
+#[test]
+fn spectral_channels_become_spectra() {
+    let mut f = fit();
+    f.channels = vec!["450nm".into(), "550nm".into(), "650nm".into()];
+    assert!(write_mitsuba(&f).contains("value=\"450:0.100000, 550:0.500000, 650:2.000000\""));
+    assert!(
+        write_pbrt(&f).contains("\"spectrum sigma_a\" [ 450 0.100000 550 0.500000 650 2.000000 ]")
+    );
+}

@@ -1,0 +1,236 @@
+//! The skin exports end to end, and the engines' conventions.
+
+use serde_json::{json, Value};
+
+use super::format::{identifiers, num, nums};
+use super::*;
+use crate::export::burley::{self, burley_energy, volume_mfp_mm, BurleyFit};
+use crate::export::xml::xml_comment;
+use crate::transport::RadialBins;
+use formats::{Array, TableFile};
+use std::f64::consts::PI;
+
+const A: [f64; 3] = [0.55, 0.3, 0.2];
+const D: [f64; 3] = [0.9, 0.25, 0.08];
+
+/// A two-entry skin table whose profiles are exactly Burley (A, d) (entry 2: d × 1.5).
+pub(crate) fn synthetic_table(dir: &std::path::Path) -> std::path::PathBuf {
+    let edges = RadialBins::fine_then_log(0.01, 1.05, 40.0)
+        .edges_mm()
+        .to_vec();
+    let nr = edges.len() - 1;
+    let centres: Vec<f64> = edges.windows(2).map(|e| 0.5 * (e[0] + e[1])).collect();
+    let names = ["typeI_age30_xi0.5", "typeVI_age80_xi1"];
+    let meta = json!({
+        "entries": serde_json::to_string(&names).unwrap(),
+        "baker_version": "test",
+        "spec_file": "synthetic.yaml",
+    });
+    let mut t = TableFile::new(formats::profile::KIND, meta);
+    for (i, name) in names.iter().enumerate() {
+        let d: Vec<f64> = D.iter().map(|d| d * (1.0 + 0.5 * i as f64)).collect();
+        let mut rd = Vec::with_capacity(nr * 3);
+        for k in 0..nr {
+            let area = PI * (edges[k + 1] * edges[k + 1] - edges[k] * edges[k]);
+            for c in 0..3 {
+                rd.push(A[c] * burley_energy(d[c], edges[k], edges[k + 1]) / area);
+            }
+        }
+        let arr = |q: &str, shape: Vec<u64>, v: Vec<f64>| {
+            Array::new_f64(format!("{name}/{q}"), shape, v).unwrap()
+        };
+        t.push(arr("r_mm", vec![nr as u64], centres.clone()))
+            .unwrap();
+        t.push(arr("r_edges_mm", vec![nr as u64 + 1], edges.clone()))
+            .unwrap();
+        t.push(arr("rd_rgb_per_mm2", vec![nr as u64, 3], rd))
+            .unwrap();
+        t.push(arr("albedo_rgb", vec![3], A.to_vec())).unwrap();
+        t.push(arr("surface/eta", vec![], vec![1.5])).unwrap();
+        t.push(arr("surface/f0", vec![], vec![0.04])).unwrap();
+        if i == 0 {
+            t.push(arr("gaussians/variance_mm2", vec![1], vec![1.0]))
+                .unwrap();
+            t.push(arr("gaussians/weight_rgb", vec![1, 3], A.to_vec()))
+                .unwrap();
+            t.push(arr("gaussians/error_rgb", vec![3], vec![0.05, 0.04, 0.03]))
+                .unwrap();
+        }
+    }
+    let path = dir.join("profiles.bkt");
+    t.write(&path, 3).unwrap();
+    path
+}
+
+fn request(table: &std::path::Path, to: &str, entry: Option<&str>) -> ExportRequest {
+    ExportRequest {
+        table: table.to_path_buf(),
+        to: to.into(),
+        entry: entry.map(str::to_string),
+    }
+}
+
+#[test]
+fn burley_export_recovers_the_generating_profile() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = synthetic_table(dir.path());
+    let export = export(&request(&table, "burley", None)).unwrap();
+    assert_eq!(export.written.as_deref(), Some("2 entries"));
+    assert_eq!((export.target, export.summary), ("burley", None));
+    let doc: Value = serde_json::from_str(&export.text).unwrap();
+    let entries = doc["entries"].as_array().unwrap();
+    assert_eq!(entries.len(), 2);
+    for (i, e) in entries.iter().enumerate() {
+        for c in 0..3 {
+            let a = e["A_rgb"][c].as_f64().unwrap();
+            let d = e["d_mm_rgb"][c].as_f64().unwrap();
+            let d_true = D[c] * (1.0 + 0.5 * i as f64);
+            assert!((a / A[c] - 1.0).abs() < 0.01, "entry {i} ch {c}: A {a}");
+            assert!((d / d_true - 1.0).abs() < 0.01, "entry {i} ch {c}: d {d}");
+            let mfp = e["mfp_mm_rgb"]["volume_perpendicular"][c].as_f64().unwrap();
+            assert!((mfp - volume_mfp_mm(a, d)).abs() < 1e-12);
+            assert!(e["burley_error_rgb"][c].as_f64().unwrap() < 1e-6);
+        }
+    }
+    // Gaussian errors are copied from the table; absent ones are null (NaN).
+    assert_eq!(entries[0]["gaussian_error_rgb"][2].as_f64(), Some(0.03));
+    assert!(entries[1]["gaussian_error_rgb"][0].is_null());
+    assert_eq!(doc["summary"]["entries"].as_u64(), Some(2));
+}
+
+#[test]
+fn every_target_writes_every_entry() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = synthetic_table(dir.path());
+    for t in Target::ALL {
+        let text = export(&request(&table, t.name(), None)).unwrap().text;
+        for name in ["typeI_age30_xi0", "typeVI_age80_xi1"] {
+            assert!(text.contains(name), "{}: no {name}", t.name());
+        }
+        if matches!(t, Target::Burley | Target::Unreal | Target::Unity) {
+            serde_json::from_str::<Value>(&text).unwrap();
+        }
+    }
+    // --entry keeps one.
+    let one = export(&request(&table, "mtlx", Some("typeVI_age80_xi1"))).unwrap();
+    assert_eq!(one.written.as_deref(), Some("1 entry"));
+    let text = one.text;
+    assert_eq!(text.matches("<open_pbr_surface").count(), 1);
+    assert!(text.contains("SR_typeVI_age80_xi1"));
+}
+
+#[test]
+fn unknown_target_and_entry_are_usage_errors_listing_the_choices() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = synthetic_table(dir.path());
+    let e = export(&request(&table, "povray", None)).unwrap_err();
+    let u = e.downcast_ref::<UsageError>().expect("usage error");
+    assert!(
+        u.0.contains("burley, mtlx, blender, unreal, unity, pbrt, mitsuba"),
+        "{}",
+        u.0
+    );
+    let e = export(&request(&table, "unreal", Some("typeIV"))).unwrap_err();
+    let u = e.downcast_ref::<UsageError>().expect("usage error");
+    assert!(
+        u.0.contains("typeI_age30_xi0.5, typeVI_age80_xi1"),
+        "{}",
+        u.0
+    );
+}
+
+fn fit_of(a: [f64; 3], d: [f64; 3]) -> SkinFit {
+    SkinFit {
+        name: "skin.1".into(),
+        albedo_rgb: a,
+        r99_mm: [1.0; 3],
+        burley: std::array::from_fn(|c| BurleyFit {
+            a: a[c],
+            d_mm: d[c],
+            error: 0.01,
+        }),
+        gaussian_error_rgb: [0.02; 3],
+        eta: 1.5,
+        f0: 0.04,
+    }
+}
+
+#[test]
+fn engine_values_follow_the_stated_conventions() {
+    let f = fit_of(A, D);
+    let prov = Provenance::default();
+    // Unreal: MFP (cm) = 0.06 s_perp(A) d, and back through Unreal's own chain to d.
+    let u: Value = serde_json::from_str(&write_unreal(std::slice::from_ref(&f), &prov)).unwrap();
+    let p = &u["profiles"][0]["SubsurfaceProfile"];
+    let dist = p["MeanFreePathDistance"].as_f64().unwrap();
+    for (c, key) in ["R", "G", "B"].iter().enumerate() {
+        let mfp = p["MeanFreePathColor"][key].as_f64().unwrap() * dist;
+        let d = burley::unreal_d_mm(A[c], mfp);
+        assert!((d / D[c] - 1.0).abs() < 1e-12, "{key}: {d}");
+        assert_eq!(p["SurfaceAlbedo"][key].as_f64(), Some(A[c]));
+    }
+    // Unity: colour × multiplier = d.
+    let h: Value = serde_json::from_str(&write_unity(std::slice::from_ref(&f), &prov)).unwrap();
+    let p = &h["profiles"][0]["DiffusionProfile"];
+    let m = p["scatteringDistanceMultiplier"].as_f64().unwrap();
+    for (c, key) in ["r", "g", "b"].iter().enumerate() {
+        let d = p["scatteringDistance"][key].as_f64().unwrap() * m;
+        assert!((d / D[c] - 1.0).abs() < 1e-12);
+    }
+    // MaterialX: radius × scale = ℓ, colour = A/(1 − F0).
+    let x = write_mtlx(std::slice::from_ref(&f), &prov);
+    let value = |name: &str| -> Vec<f64> {
+        let at = x.find(&format!("name=\"{name}\"")).unwrap();
+        let v = &x[at..];
+        let v = &v[v.find("value=\"").unwrap() + 7..];
+        v[..v.find('"').unwrap()]
+            .split(',')
+            .map(|t| t.trim().parse().unwrap())
+            .collect()
+    };
+    let (radius, scale, colour) = (
+        value("subsurface_radius")[0],
+        value("subsurface_radius_scale"),
+        value("subsurface_color"),
+    );
+    for c in 0..3 {
+        let l = volume_mfp_mm(A[c], D[c]);
+        assert!((radius * scale[c] / l - 1.0).abs() < 1e-5);
+        assert!((colour[c] - A[c] / 0.96).abs() < 1e-6);
+    }
+    assert!(x.contains("name=\"SR_skin_1\""), "identifier: {x}");
+    // Blender: radius = 4π d.
+    let b = write_blender(std::slice::from_ref(&f), &prov);
+    assert!(b.contains(&nums(&D.map(|d| 4.0 * PI * d))), "{b}");
+    // Mitsuba: scale × sigma_t = 1/ℓ.
+    let m = write_mitsuba(&[f], &prov);
+    assert!(
+        m.contains("id=\"skin_1_boundary\"")
+            && m.contains("<medium type=\"homogeneous\" id=\"skin_1\">")
+    );
+}
+
+#[test]
+fn unreal_small_mean_free_paths_move_into_the_colour() {
+    let f = fit_of([0.5, 0.3, 0.2], [0.3, 0.1, 0.05]);
+    let u: Value = serde_json::from_str(&write_unreal(&[f], &Provenance::default())).unwrap();
+    let p = &u["profiles"][0]["SubsurfaceProfile"];
+    assert_eq!(p["MeanFreePathDistance"].as_f64(), Some(0.1));
+    let r = p["MeanFreePathColor"]["R"].as_f64().unwrap();
+    let want = burley::unreal_mfp_cm(0.5, 0.3) / 0.1;
+    assert!(r < 1.0 && (r - want).abs() < 1e-12, "{r} vs {want}");
+}
+
+#[test]
+fn identifiers_are_valid_and_unique() {
+    let mut a = fit_of(A, D);
+    a.name = "x0.5".into();
+    let mut b = a.clone();
+    b.name = "x0_5".into();
+    let mut c = a.clone();
+    c.name = "9lives".into();
+    assert_eq!(identifiers(&[a, b, c]), ["x0_5", "x0_5_2", "_9lives"]);
+    assert_eq!(num(0.012345678), "0.01234568");
+    assert_eq!(num(1234.56789), "1234.568");
+    assert_eq!(xml_comment("a--b"), "a- -b");
+}

@@ -1,0 +1,369 @@
+//! 4D BCSDF tables (§5.3.2, §5.5): for every stored incoming bin, one trace of the fiber lit
+//! by a beam averaged over that bin, binned over the outgoing sphere for every channel of a
+//! dye sweep at once ([`super::sweep`]).
+//!
+//! Variance reduction (the thesis shoots 16 M plain photons per direction):
+//! - **Stratified entry offsets**: photon j of a batch of n enters at (j + u)/n across the
+//!   beam, so the beam is covered evenly.
+//! - **Splitting at interfaces**: each boundary event of a photon's main path is drawn
+//!   `split` times; every draw that leaves is followed at weight w/split, one of the draws
+//!   that enter goes on at the weight of all of them ([`super::tracer`]). The reflection
+//!   lobe, the exit lobes (TT, TRT, …) and the roughness of every exit get `split` samples
+//!   where plain tracing gets one.
+//!
+//! Standard errors come from the spread of independent batches (batch means), which is
+//! valid for split and stratified estimators alike.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::sweep::{ChannelKind, Channels};
+use super::tracer::Setup;
+use super::{Fiber, Incident};
+use crate::cancel::{Cancel, Cancelled};
+use crate::math::rng::{batch_rng, uniform};
+use formats::{AngularGrid, Precision};
+use rand_core::Rng;
+
+/// Settings of a bake (`bake:` in a fiber spec).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct BakeSettings {
+    /// Bin width of θ and φ, degrees (thesis: 2°).
+    pub res_deg: f64,
+    /// Photons launched per stored incoming direction (rounded up to whole batches).
+    pub photons: u64,
+    pub seed: u64,
+    /// Draws per boundary event of a photon's main path (1: plain tracing).
+    pub split: u32,
+    /// Photons per batch (one RNG stream, one term of the batch-means error).
+    pub batch: u64,
+    pub precision: Precision,
+    /// Mantissa bits kept (bit rounding; the type's full width is lossless).
+    pub keep_bits: u32,
+    pub channels: ChannelKind,
+    pub lambda_nm: Vec<f64>,
+    pub zstd_level: i32,
+}
+
+impl Default for BakeSettings {
+    fn default() -> Self {
+        Self {
+            res_deg: 2.0,
+            photons: 1 << 20,
+            seed: 1,
+            split: 1,
+            batch: 4096,
+            precision: Precision::F16,
+            keep_bits: 10,
+            channels: ChannelKind::Rgb,
+            lambda_nm: (0..31).map(|i| 400.0 + 10.0 * i as f64).collect(),
+            zstd_level: 9,
+        }
+    }
+}
+
+impl BakeSettings {
+    /// Batches traced per stored direction for `photons` asked for: whole batches, at least
+    /// two (the per-bin standard error needs two).
+    pub fn batches_for(&self, photons: u64) -> u64 {
+        photons.div_ceil(self.batch).max(2)
+    }
+
+    /// Photons traced per stored direction: [`BakeSettings::batches_for`] whole batches.
+    pub fn photons_per_direction(&self) -> u64 {
+        self.batches_for(self.photons) * self.batch
+    }
+
+    /// Channels per dye variant: 3 (RGB) or one per wavelength of `lambda_nm` (spectral).
+    pub fn channels_per_variant(&self) -> usize {
+        match self.channels {
+            ChannelKind::Rgb => 3,
+            ChannelKind::Spectral => self.lambda_nm.len(),
+        }
+    }
+}
+
+/// Noise of a slice: relative standard error of the sampling density per bin, over bins
+/// whose density exceeds 1 % of the slice's maximum.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Noise {
+    pub median_rel_se: f64,
+    pub p90_rel_se: f64,
+    pub bins: usize,
+}
+
+/// One traced incoming bin.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct SliceResult {
+    /// Fractions of the intercepted power per channel and bin, `[channel][θo][Δφ]`.
+    pub fraction: Vec<f64>,
+    /// Λ(ωi) per channel and its standard error.
+    pub albedo: Vec<f64>,
+    pub albedo_se: Vec<f64>,
+    pub noise: Noise,
+    pub launched: u64,
+    pub intercepted: u64,
+    pub lost_weight: f64,
+    pub seconds: f64,
+}
+
+impl SliceResult {
+    /// The normalised BCSDF f̂ = P/(Λ·ΔΩ), sr⁻¹, per channel (zero where Λ = 0).
+    pub fn normalised(&self, grid: &AngularGrid) -> Vec<f64> {
+        let bins = grid.bins();
+        let mut out = vec![0.0; self.fraction.len()];
+        for (c, a) in self.albedo.iter().enumerate() {
+            if *a <= 0.0 {
+                continue;
+            }
+            for b in 0..bins {
+                out[c * bins + b] =
+                    self.fraction[c * bins + b] / (a * grid.solid_angle(b / grid.n_phi));
+            }
+        }
+        out
+    }
+}
+
+/// The incoming bin (θ row `it`, φ column `jp`) as an incident beam averaged over the bin.
+pub fn incident_of_bin(grid: &AngularGrid, it: usize, jp: usize) -> Incident {
+    let r = grid.res_deg;
+    Incident::from_deg(grid.theta_centre_deg(it), grid.phi_centre_deg(jp)).with_spread_deg(r, r)
+}
+
+/// Stored incoming directions per work unit of a bake: a function of their number only, so
+/// the units (and shards) do not depend on the machine.
+pub fn unit_len(n_wi: usize) -> usize {
+    n_wi.div_ceil(48).max(4)
+}
+
+/// Batches traced before their tallies are merged (bounds memory for wide sweeps).
+const GROUP: u64 = 16;
+
+/// Traces one incoming bin for every channel. Deterministic for a given seed whatever the
+/// thread count (batches are merged in order). `cancel` is checked before every group of
+/// batches.
+pub fn trace_slice(
+    fiber: &Fiber,
+    inc: Incident,
+    grid: &AngularGrid,
+    channels: &Channels,
+    s: &BakeSettings,
+    seed: u64,
+    cancel: &Cancel,
+) -> Result<SliceResult, Cancelled> {
+    let start = Instant::now();
+    let job = SliceJob {
+        setup: Setup::new(fiber, inc),
+        inc,
+        grid,
+        channels,
+        s,
+        seed,
+    };
+    let nb = s.batches_for(s.photons);
+    let mut sums = SliceSums::new(grid.bins(), channels.len(), channels.per_variant());
+    let mut b0 = 0;
+    while b0 < nb {
+        cancel.check()?;
+        let b1 = (b0 + GROUP).min(nb);
+        let parts: Vec<BatchScore> = (b0..b1)
+            .into_par_iter()
+            .map(|b| job.trace_batch(b))
+            .collect();
+        for part in &parts {
+            sums.add(part);
+        }
+        b0 = b1;
+    }
+    Ok(sums.into_result(grid, nb * s.batch, start))
+}
+
+/// What every batch of one incoming bin shares.
+struct SliceJob<'a> {
+    setup: Setup<'a>,
+    inc: Incident,
+    grid: &'a AngularGrid,
+    channels: &'a Channels,
+    s: &'a BakeSettings,
+    seed: u64,
+}
+
+/// The scores of one batch: weight per bin and channel, `[bin][channel]`, and its photons.
+struct BatchScore {
+    local: Vec<f64>,
+    hits: u64,
+    lost: f64,
+    /// Σ g over the photons that met the fiber (their intercepted power).
+    g_sum: f64,
+}
+
+impl SliceJob<'_> {
+    /// Traces batch `b`: `s.batch` photons at stratified entry offsets, each exit binned for
+    /// every channel at once.
+    fn trace_batch(&self, b: u64) -> BatchScore {
+        let (grid, channels, s) = (self.grid, self.channels, self.s);
+        let nch = channels.len();
+        let mut rng = batch_rng(self.seed, b);
+        let mut local = vec![0.0; grid.bins() * nch];
+        let mut row = vec![0.0; nch];
+        let mut last = f64::NAN;
+        let (mut h, mut l, mut gsum) = (0u64, 0.0, 0.0);
+        let n = s.batch;
+        for j in 0..n {
+            let off = (j as f64 + uniform(rng.next_u64())) / n as f64;
+            let st = self
+                .setup
+                .photon(&mut rng, Some(off), s.split, &mut |dir, path, w| {
+                    if path != last {
+                        row.iter_mut().for_each(|x| *x = 0.0);
+                        channels.add_weighted(path, 1.0, &mut row);
+                        last = path;
+                    }
+                    let bin = grid.bin(dir, self.inc.phi_rad) as usize;
+                    for (o, r) in local[bin * nch..(bin + 1) * nch].iter_mut().zip(&row) {
+                        *o += w * r;
+                    }
+                });
+            h += st.hit as u64;
+            if st.hit {
+                gsum += st.g;
+            }
+            l += st.lost;
+        }
+        BatchScore {
+            local,
+            hits: h,
+            lost: l,
+            g_sum: gsum,
+        }
+    }
+}
+
+/// Batch scores merged in batch order, with the batch-means sums of the error estimates.
+struct SliceSums {
+    bins: usize,
+    nch: usize,
+    per_variant: usize,
+    /// `[bin][channel]`.
+    sum: Vec<f64>,
+    /// Per bin: Σ and Σ² over batches of the sampling density of variant 0.
+    noise_s: Vec<f64>,
+    noise_s2: Vec<f64>,
+    /// Per channel: Σ and Σ² over batches of the albedo.
+    alb_s: Vec<f64>,
+    alb_s2: Vec<f64>,
+    hits: u64,
+    lost: f64,
+    used: u64,
+    gtot: f64,
+}
+
+impl SliceSums {
+    fn new(bins: usize, nch: usize, per_variant: usize) -> Self {
+        Self {
+            bins,
+            nch,
+            per_variant,
+            sum: vec![0.0; bins * nch],
+            noise_s: vec![0.0; bins],
+            noise_s2: vec![0.0; bins],
+            alb_s: vec![0.0; nch],
+            alb_s2: vec![0.0; nch],
+            hits: 0,
+            lost: 0.0,
+            used: 0,
+            gtot: 0.0,
+        }
+    }
+
+    /// Adds the next batch (in batch order).
+    fn add(&mut self, part: &BatchScore) {
+        let (bins, nch, per_variant) = (self.bins, self.nch, self.per_variant);
+        let (local, g) = (&part.local, part.g_sum);
+        self.hits += part.hits;
+        self.lost += part.lost;
+        self.gtot += g;
+        self.used += 1;
+        // Normalise by the intercepted power Σg (the spread weights of the photons that
+        // met the fiber), so Λ is exactly the fraction of that power which leaves.
+        let hn = if g > 0.0 { g } else { 1.0 };
+        for (a, x) in self.sum.iter_mut().zip(local) {
+            *a += x;
+        }
+        // Batch means: the sampling density of variant 0 and every channel's albedo.
+        for b in 0..bins {
+            let x = local[b * nch..b * nch + per_variant].iter().sum::<f64>()
+                / (per_variant as f64 * hn);
+            self.noise_s[b] += x;
+            self.noise_s2[b] += x * x;
+        }
+        for c in 0..nch {
+            let a = (0..bins).map(|b| local[b * nch + c]).sum::<f64>() / hn;
+            self.alb_s[c] += a;
+            self.alb_s2[c] += a * a;
+        }
+    }
+
+    /// Fractions, albedos and their errors, and the noise of the slice.
+    fn into_result(self, grid: &AngularGrid, launched: u64, start: Instant) -> SliceResult {
+        let (bins, nch) = (self.bins, self.nch);
+        let nbf = self.used as f64;
+        let hn = if self.gtot > 0.0 { self.gtot } else { 1.0 };
+        let mut fraction = vec![0.0; nch * bins];
+        for b in 0..bins {
+            for c in 0..nch {
+                fraction[c * bins + b] = self.sum[b * nch + c] / hn;
+            }
+        }
+        let albedo: Vec<f64> = (0..nch)
+            .map(|c| fraction[c * bins..(c + 1) * bins].iter().sum())
+            .collect();
+        let albedo_se = (0..nch)
+            .map(|c| batch_se(self.alb_s[c], self.alb_s2[c], nbf))
+            .collect();
+        SliceResult {
+            fraction,
+            albedo,
+            albedo_se,
+            noise: self.noise(grid, nbf),
+            launched,
+            intercepted: self.hits,
+            lost_weight: self.lost,
+            seconds: start.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// Noise over bins with density ≥ 1 % of the maximum (density per steradian).
+    fn noise(&self, grid: &AngularGrid, nbf: f64) -> Noise {
+        let (noise_s, noise_s2) = (&self.noise_s, &self.noise_s2);
+        let dens: Vec<f64> = (0..self.bins)
+            .map(|b| noise_s[b] / nbf / grid.solid_angle(b / grid.n_phi))
+            .collect();
+        let dmax = dens.iter().copied().fold(0.0, f64::max);
+        let mut rel: Vec<f64> = (0..self.bins)
+            .filter(|&b| dmax > 0.0 && dens[b] >= 0.01 * dmax)
+            .map(|b| batch_se(noise_s[b], noise_s2[b], nbf) / (noise_s[b] / nbf))
+            .collect();
+        rel.sort_by(f64::total_cmp);
+        let q = |p: f64| {
+            if rel.is_empty() {
+                0.0
+            } else {
+                rel[((rel.len() - 1) as f64 * p).round() as usize]
+            }
+        };
+        Noise {
+            median_rel_se: q(0.5),
+            p90_rel_se: q(0.9),
+            bins: rel.len(),
+        }
+    }
+}
+
+/// Standard error of the mean of `nbf` batch means with sums `s` and `s2`.
+fn batch_se(s: f64, s2: f64, nbf: f64) -> f64 {
+    let m = s / nbf;
+    ((s2 / nbf - m * m).max(0.0) / (nbf - 1.0)).sqrt()
+}

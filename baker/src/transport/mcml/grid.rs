@@ -1,0 +1,139 @@
+//! MCML's 2D tallies: absorption A(r, z) and the reflectance and transmittance Rd(r, α),
+//! Tt(r, α), scored alongside the engine's own tallies.
+
+use std::f64::consts::PI;
+use std::time::Instant;
+
+use super::mci::McmlRun;
+use crate::math::rng::batch_rng;
+use crate::transport::engine::{run_batches, trace, DirectScorer, McOptions, Prepared, Scorer};
+use crate::transport::stack::MAX_LAYERS;
+use crate::transport::tally::{McResult, RadialTally};
+
+/// MCML's raw 2D tallies (photon weight), clamped into the last bins as MCML does.
+#[derive(Debug, Clone, PartialEq)]
+pub struct McmlGrid {
+    pub a_rz: Vec<f64>,
+    pub rd_ra: Vec<f64>,
+    pub tt_ra: Vec<f64>,
+}
+
+struct GridScorer<'a> {
+    direct: DirectScorer<'a>,
+    grid: McmlGrid,
+    nz: usize,
+    nr: usize,
+    na: usize,
+    dz_mm: f64,
+    dr_mm: f64,
+    da: f64,
+}
+
+impl GridScorer<'_> {
+    fn ir(&self, pos: &[f64; 3]) -> usize {
+        (((pos[0] * pos[0] + pos[1] * pos[1]).sqrt() / self.dr_mm) as usize).min(self.nr - 1)
+    }
+    fn ia(&self, cos_out: f64) -> usize {
+        ((cos_out.abs().min(1.0).acos() / self.da) as usize).min(self.na - 1)
+    }
+}
+
+impl Scorer for GridScorer<'_> {
+    fn absorb(&mut self, layer: usize, dw: f64, pos: &[f64; 3]) {
+        self.direct.absorb(layer, dw, pos);
+        let iz = ((pos[2] / self.dz_mm) as usize).min(self.nz - 1);
+        let ir = self.ir(pos);
+        self.grid.a_rz[ir * self.nz + iz] += dw;
+    }
+    fn escape(
+        &mut self,
+        top: bool,
+        scattered: bool,
+        weight: f64,
+        pos: &[f64; 3],
+        cos_out: f64,
+        path: &[f64],
+    ) {
+        self.direct
+            .escape(top, scattered, weight, pos, cos_out, path);
+        let k = self.ir(pos) * self.na + self.ia(cos_out);
+        if top {
+            self.grid.rd_ra[k] += weight;
+        } else {
+            self.grid.tt_ra[k] += weight;
+        }
+    }
+    fn lost(&mut self, weight: f64) {
+        self.direct.lost(weight);
+    }
+    fn photon_done(&mut self) {
+        self.direct.photon_done();
+    }
+}
+
+/// Runs `run` with MCML's grids as well as the engine's own tallies.
+pub fn simulate_grid(run: &McmlRun, o: &McOptions) -> anyhow::Result<(McResult, McmlGrid)> {
+    let p = Prepared::new(&run.stack)?;
+    let (nz, nr, na) = (run.nz, run.nr, run.na);
+    let empty = || McmlGrid {
+        a_rz: vec![0.0; nr * nz],
+        rd_ra: vec![0.0; nr * na],
+        tt_ra: vec![0.0; nr * na],
+    };
+    let no_ref = [0.0; MAX_LAYERS];
+    let t0 = Instant::now();
+    let mut total = RadialTally::new(p.nl, p.nr);
+    let mut grid = empty();
+    // Grids can be large (nr·nz values per batch): batches 10× larger than usual amortise
+    // their allocation, and only a couple per thread are in flight. Still deterministic for a
+    // given seed, whatever the thread count.
+    let o = &McOptions {
+        batch_size: o.batch_size.max(1) * 10,
+        ..o.clone()
+    };
+    let threads = run_batches(
+        2,
+        o,
+        |b, n| {
+            let mut rng = batch_rng(o.seed, b);
+            let mut t = RadialTally::new(p.nl, p.nr);
+            let mut events = 0;
+            let g = {
+                let mut s = GridScorer {
+                    direct: DirectScorer {
+                        t: &mut t,
+                        absorbed: [0.0; MAX_LAYERS],
+                        dr_mm: p.dr_mm,
+                    },
+                    grid: empty(),
+                    nz,
+                    nr,
+                    na,
+                    dz_mm: run.dz_cm * 10.0,
+                    dr_mm: run.dr_cm * 10.0,
+                    da: 0.5 * PI / na as f64,
+                };
+                for _ in 0..n {
+                    trace::<false, _>(&p, &no_ref, &mut rng, &mut s, &mut events);
+                }
+                s.grid
+            };
+            t.scattering_events = events;
+            (t, g)
+        },
+        |(t, g)| {
+            total.merge(&t);
+            for (a, b) in grid.a_rz.iter_mut().zip(&g.a_rz) {
+                *a += b;
+            }
+            for (a, b) in grid.rd_ra.iter_mut().zip(&g.rd_ra) {
+                *a += b;
+            }
+            for (a, b) in grid.tt_ra.iter_mut().zip(&g.tt_ra) {
+                *a += b;
+            }
+        },
+    )?;
+    let r = McResult::from_tally(&total, p.rsp, p.dr_mm, threads, t0.elapsed().as_secs_f64());
+    Ok((r, grid))
+}
