@@ -19,6 +19,19 @@ struct Baked {
 
 /// Bakes every entry of `yaml` in memory, with `reuse` as asked.
 fn bake(yaml: &str, photons: u64, reuse: bool, max_boost: u64) -> Baked {
+    let o = SimOptions {
+        photons,
+        seed: 11,
+        threads: None,
+        max_boost,
+        noise: None,
+        progress: None,
+    };
+    bake_with(yaml, reuse, &o)
+}
+
+/// Bakes every entry of `yaml` in memory with options `o`.
+fn bake_with(yaml: &str, reuse: bool, o: &SimOptions) -> Baked {
     let spec = load_str("test.yaml", yaml).unwrap();
     let lam = spec.wavelengths.lambda_nm();
     let entries: Vec<formats::OpticsEntry> = spec
@@ -31,14 +44,7 @@ fn bake(yaml: &str, photons: u64, reuse: bool, max_boost: u64) -> Baked {
         .collect();
     let bins = RadialBins::fine_then_log(0.01, 1.1, 40.0);
     let plan = profile::plan(&entries, lam.len(), reuse);
-    let o = SimOptions {
-        photons,
-        seed: 11,
-        threads: None,
-        max_boost,
-        progress: None,
-    };
-    let spectral = profile::simulate(&entries, lam, &bins, &plan, &o, |_, _, _| {}).unwrap();
+    let spectral = profile::simulate(&entries, lam, &bins, &plan, o, |_, _, _| {}).unwrap();
     let colour = ColourMap::new(lam);
     let rgb = spectral
         .iter()
@@ -178,6 +184,118 @@ sweeps:
     }
     // 12 independent comparisons: |z| < 4.5 fails by chance with probability < 1e-4.
     assert!(worst < 4.5, "worst |z| = {worst}");
+}
+
+#[test]
+fn noise_target_keeps_the_uniform_bakes_noise_and_is_unbiased() {
+    // Types I and VI at the junction's age, 415–700 nm: the allocation moves packets between
+    // wavelengths; every spectral and RGB bin must agree with the uniform bake (z-scores
+    // and χ² over the radial bins) and the RGB bins be no noisier than it (up to the pilots'
+    // own error).
+    let yaml = r#"
+version: 1
+wavelengths: {list_nm: [415, 450, 500, 550, 600, 650, 700]}
+defaults: {model: five_layer, gender: female, location: face, age: 30, xi: 0}
+sweeps:
+  - name: "t{skin_type}"
+    skin_type: [I, VI]
+"#;
+    const TARGET: f64 = 0.01;
+    let photons = 20_000;
+    let uniform = bake_with(
+        yaml,
+        true,
+        &SimOptions {
+            photons,
+            seed: 6,
+            threads: None,
+            max_boost: 1,
+            noise: None,
+            progress: None,
+        },
+    );
+    let allocated = bake_with(
+        yaml,
+        true,
+        &SimOptions {
+            photons,
+            seed: 5,
+            threads: None,
+            max_boost: 1,
+            noise: profile::NoiseTarget::new(TARGET, photons),
+            progress: None,
+        },
+    );
+    let counts = &allocated.spectral[0].photons;
+    assert!(
+        counts.iter().any(|&n| n != photons),
+        "the allocation changed nothing: {counts:?}"
+    );
+    // Spectral: per entry and wavelength, every bin out to 2 mm.
+    for (u, a) in uniform.spectral.iter().zip(&allocated.spectral) {
+        for i in 0..u.lambda_nm.len() {
+            let (mut chi2, mut dof) = (0.0, 0usize);
+            for k in 0..u.r_edges_mm.len() - 1 {
+                let (su, sa) = (u.rd_per_mm2_se[i][k], a.rd_per_mm2_se[i][k]);
+                if u.r_edges_mm[k + 1] > 2.0 || su == 0.0 || sa == 0.0 {
+                    continue;
+                }
+                let z = (a.rd_per_mm2[i][k] - u.rd_per_mm2[i][k]) / (su * su + sa * sa).sqrt();
+                assert!(z.abs() < 5.0, "{} nm, bin {k}: z = {z}", u.lambda_nm[i]);
+                chi2 += z * z;
+                dof += 1;
+            }
+            let (mean, tol) = (chi2 / dof as f64, 5.0 * (2.0 / dof as f64).sqrt());
+            assert!(
+                (mean - 1.0).abs() < tol,
+                "{} nm: χ²/dof = {mean} over {dof} bins",
+                u.lambda_nm[i]
+            );
+        }
+    }
+    // RGB: per channel, the bins inside min(2 mm, r99), where the bake measures noise.
+    let (mut chi2, mut dof, mut ratios) = (0.0, 0usize, Vec::new());
+    for (u, a) in uniform.rgb.iter().zip(&allocated.rgb) {
+        let edges = &uniform.spectral[0].r_edges_mm;
+        for c in 0..3 {
+            let r_limit = u.r99_mm[c].min(2.0);
+            // The worst relative SE of the channel, as the bake's summary reports it.
+            let (mut worst_u, mut worst_a) = (0.0f64, 0.0f64);
+            for k in 0..edges.len() - 1 {
+                if 0.5 * (edges[k] + edges[k + 1]) > r_limit {
+                    continue;
+                }
+                let (mu, su) = (u.rd_rgb_per_mm2[k][c], u.rd_rgb_per_mm2_se[k][c]);
+                let (ma, sa) = (a.rd_rgb_per_mm2[k][c], a.rd_rgb_per_mm2_se[k][c]);
+                if su == 0.0 || sa == 0.0 {
+                    continue;
+                }
+                let z = (ma - mu) / (su * su + sa * sa).sqrt();
+                assert!(z.abs() < 5.0, "channel {c}, bin {k}: z = {z}");
+                chi2 += z * z;
+                dof += 1;
+                ratios.push((sa / ma) / (su / mu).max(TARGET));
+                worst_u = worst_u.max(su / mu);
+                worst_a = worst_a.max(sa / ma);
+            }
+            assert!(
+                worst_a < 1.2 * worst_u.max(TARGET),
+                "channel {c}: worst relative SE {worst_a} against the uniform bake's {worst_u}"
+            );
+        }
+    }
+    // χ² over `dof` bins: mean 1 per bin, sd √(2/dof); 5 sd either side.
+    let mean = chi2 / dof as f64;
+    let tol = 5.0 * (2.0 / dof as f64).sqrt();
+    assert!(
+        dof > 50 && (mean - 1.0).abs() < tol,
+        "χ²/dof = {mean} over {dof} bins"
+    );
+    // Bin by bin, the relative SE is typically no worse than the uniform bake's (or 1 %); single
+    // bins scatter by the SE estimates' own error (±20 % at 20,000 packets in dark skin).
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    assert!(median < 1.05, "median relative SE ratio {median}");
 }
 
 #[test]

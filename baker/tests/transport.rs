@@ -188,7 +188,8 @@ impl WithoutJunction for Stack {
 }
 
 /// Absorption reuse equals direct absorbing simulation (5-layer skin, junction included, types
-/// I and VI at 415, 550, 650 nm: one white run per wavelength serves both types).
+/// I and VI at 415, 550, 650 nm: one white run per wavelength serves both types): totals within
+/// 3.5 SE, χ² over the radial bins.
 #[test]
 fn absorption_reuse_matches_direct_simulation() {
     for (k, lambda) in [415.0, 550.0, 650.0].into_iter().enumerate() {
@@ -235,6 +236,23 @@ fn absorption_reuse_matches_direct_simulation() {
                 let se = (sw * sw + sd * sd).sqrt();
                 within(w, d, 3.5 * se + 1e-9, &format!("{name} at {lambda} nm"));
             }
+            // χ² over the radial bins out to 2 mm: the white run's roulette (on the reference
+            // weight, at 1e-2) and the reuse leave every bin's mean unchanged.
+            let (mut chi2, mut dof) = (0.0, 0usize);
+            for k in 0..reused.rd_r_per_mm2.len().min(200) {
+                let (sw, sd) = (reused.rd_r_per_mm2_se[k], direct.rd_r_per_mm2_se[k]);
+                if sw > 0.0 && sd > 0.0 {
+                    let z = (reused.rd_r_per_mm2[k] - direct.rd_r_per_mm2[k])
+                        / (sw * sw + sd * sd).sqrt();
+                    chi2 += z * z;
+                    dof += 1;
+                }
+            }
+            let mean = chi2 / dof as f64;
+            assert!(
+                dof > 100 && (mean - 1.0).abs() < 5.0 * (2.0 / dof as f64).sqrt(),
+                "χ²/dof = {mean} over {dof} radial bins at {lambda} nm"
+            );
         }
     }
 }

@@ -40,6 +40,7 @@ pub fn plan_units(
         seed: s.seed,
         threads: None,
         max_boost: s.max_photon_boost,
+        noise: profile::NoiseTarget::new(s.noise_target, photons.unwrap_or(s.photons)),
         progress: None,
     };
     let units = profile::skin_units(&optics, lam, &bins, &plan, &sim);

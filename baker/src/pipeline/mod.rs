@@ -196,6 +196,13 @@ impl Runner {
         }
     }
 
+    /// Records that the outputs depend on unit `key` although this run did not need to load
+    /// it (a pilot run whose main runs were all cached), so that the manifest and the cache
+    /// roots list the same units however many runs the bake took.
+    pub fn depends_on(&self, id: &str, key: Key) {
+        self.used.lock().unwrap().push((id.to_string(), key));
+    }
+
     /// The result of a unit: from the cache, or computed (and cached) if this process owns
     /// it; `Ok(None)` if another shard owns it. Units without an index (pilot runs, fits) are
     /// computed by whichever process needs them, `baker merge` included.

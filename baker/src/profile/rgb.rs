@@ -4,6 +4,7 @@ use super::simulate::SpectralProfile;
 use crate::cancel::{Cancel, Cancelled};
 use crate::fit::{fit_sum_of_gaussians, GaussianFit, GaussianFitOptions};
 use crate::spectral::ColourMap;
+use crate::transport::radial::radius_of_energy;
 
 /// What a renderer loads for one entry.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -19,21 +20,6 @@ pub struct RgbProfile {
     /// Radius holding 99 % of each channel's diffuse energy, mm; NaN when the grid ends first.
     pub r99_mm: [f64; 3],
     pub fit: GaussianFit,
-}
-
-/// Radius where the cumulative energy of `rd` (per unit area, on annuli `edges_mm`) first
-/// reaches `target`, interpolating the cumulative linearly in r inside the bin; NaN if never.
-pub fn radius_of_energy(edges_mm: &[f64], rd: impl Iterator<Item = f64>, target: f64) -> f64 {
-    let mut cum = 0.0;
-    for (k, v) in rd.enumerate() {
-        let (a, b) = (edges_mm[k], edges_mm[k + 1]);
-        let e = v * std::f64::consts::PI * (b * b - a * a);
-        if cum + e >= target && e > 0.0 {
-            return a + (b - a) * ((target - cum) / e).clamp(0.0, 1.0);
-        }
-        cum += e;
-    }
-    f64::NAN
 }
 
 /// The RGB profile of `p` and its sum-of-`gaussians` fit; `Err` once `cancel` is set.

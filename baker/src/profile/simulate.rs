@@ -11,8 +11,10 @@ use anyhow::Context as _;
 
 use formats::OpticsEntry;
 
+use super::allocate::{allocate, NoiseTarget};
 use crate::math::rng::{digest_words, group_wavelength_seed};
 use crate::pipeline::{Cache, CacheMode, Events, Key, KeyBuilder, Runner};
+use crate::spec::skin::profiles::NOISE_PILOT_MAX;
 use crate::transport::white::{SetTally, WhiteSets};
 use crate::transport::{self, run_white_sets, McOptions, RadialBins, Stack};
 
@@ -56,8 +58,11 @@ pub struct SimOptions {
     pub threads: Option<usize>,
     /// Wavelengths whose packets are cheap (few scattering events, e.g. strongly absorbed
     /// blue) get up to this many times `photons`, so that every wavelength of a group costs
-    /// about the same as its most expensive one. 1 turns it off.
+    /// about the same as its most expensive one. 1 turns it off. Only without `noise`.
     pub max_boost: u64,
+    /// Photons per wavelength chosen by [`allocate`] from pilot runs to meet a noise target at
+    /// the least work; `None`: `photons` at every wavelength (times the boost).
+    pub noise: Option<NoiseTarget>,
     /// Where finished photon packets are reported.
     pub progress: crate::progress::Reporter,
 }
@@ -148,7 +153,8 @@ pub fn simulate(
 }
 
 /// The work units of a skin bake: per group and wavelength a pilot run (photon counts, only
-/// with `max_boost > 1`; not sharded) and the main run (sharded by its index g·nλ + i).
+/// with a noise target or `max_boost > 1`; not sharded) and the main run (sharded by its index
+/// g·nλ + i).
 pub struct SkinUnits {
     pub pilot: Vec<Vec<Key>>,
     pub run: Vec<Vec<Key>>,
@@ -180,7 +186,13 @@ pub fn skin_units(
     o: &SimOptions,
 ) -> SkinUnits {
     let nl = lambda_nm.len();
-    let pilot_photons = (o.photons / 100).clamp(2_000, 20_000).min(o.photons);
+    let pilot_photons = pilot_photons(o);
+    // A noise target's pilots score every bin; a boost's pilots only count events.
+    let pilot_bins = if o.noise.is_some() {
+        bins.edges_mm().to_vec()
+    } else {
+        vec![0.0, 1.0]
+    };
     let batch = McOptions::new(1, 0).batch_size;
     let mut pilot = Vec::new();
     let mut run = Vec::new();
@@ -190,13 +202,14 @@ pub fn skin_units(
         let inputs: Vec<(Stack, Vec<Vec<f64>>)> = (0..nl)
             .map(|i| stack_and_sets(entries, plan, g, i))
             .collect();
-        if o.max_boost > 1 {
+        if o.noise.is_some() || o.max_boost > 1 {
             for (i, (stack, sets)) in inputs.iter().enumerate() {
                 pk.push(
                     KeyBuilder::new("skin-pilot", crate::data::checksum())
                         .part("stack", stack)
                         .part("sets", sets)
                         .part("photons", &pilot_photons)
+                        .part("r_edges_mm", &pilot_bins)
                         .part(
                             "seed",
                             &group_wavelength_seed(o.seed ^ PILOT_TAG, plan.digests[g], i),
@@ -216,6 +229,8 @@ pub fn skin_units(
                     .part("r_edges_mm", &bins.edges_mm())
                     .part("photons", &o.photons)
                     .part("max_boost", &o.max_boost)
+                    .part("noise", &o.noise)
+                    .part("lambda_nm", &lambda_nm)
                     .digest("pilots", &pilots)
                     .part("seed", &group_wavelength_seed(o.seed, plan.digests[g], i))
                     .part("batch", &batch)
@@ -313,6 +328,12 @@ pub fn simulate_units(
             }
             on_task(done, total, t0.elapsed().as_secs_f64());
         }
+        if photons.is_none() {
+            // The group's pilots were not needed this time; the results still depend on them.
+            for (i, &key) in units.pilot[g].iter().enumerate() {
+                runner.depends_on(&unit_id(prefix, "pilot/", g, lambda_nm[i]), key);
+            }
+        }
     }
     Ok(complete.then_some(out))
 }
@@ -361,11 +382,27 @@ fn store_run(
     }
 }
 
-/// Photons of group `g` per wavelength: `o.photons`, times an integer boost ⌊e_max/e_λ⌋ capped
-/// at `o.max_boost`, e_λ the scattering events per packet of a short pilot run (deterministic:
-/// seeded like the main runs) and e_max the group's largest. Cheap wavelengths — strongly
-/// absorbed blue light, where dark skin's profiles are noisiest — get more packets for about
-/// the cost of the group's most expensive wavelength.
+/// Packets of each pilot run: 2.5 % of `photons` (at most 100,000) for a noise target, whose
+/// pilots estimate per-bin variances; 1 % (at most 20,000) for a boost, which counts events.
+fn pilot_photons(o: &SimOptions) -> u64 {
+    if o.noise.is_some() {
+        (o.photons / 40)
+            .clamp(2_000, NOISE_PILOT_MAX)
+            .min(o.photons)
+    } else {
+        (o.photons / 100).clamp(2_000, 20_000).min(o.photons)
+    }
+}
+
+/// Photons of group `g` per wavelength:
+/// - with a noise target, [`allocate`]'s counts from the group's pilot runs;
+/// - with a boost, `o.photons` times an integer boost ⌊e_max/e_λ⌋ capped at `o.max_boost`,
+///   e_λ the scattering events per packet of the pilot and e_max the group's largest. Cheap
+///   wavelengths — strongly absorbed blue light, where dark skin's profiles are noisiest — get
+///   more packets for about the cost of the group's most expensive wavelength;
+/// - else `o.photons`.
+///
+/// Deterministic: the pilots are seeded like the main runs.
 fn photon_counts(
     sim: &SkinSimulation<'_>,
     units: &SkinUnits,
@@ -376,16 +413,20 @@ fn photon_counts(
     let SkinSimulation {
         entries,
         lambda_nm,
+        bins,
         plan,
         o,
-        ..
     } = *sim;
     let nl = lambda_nm.len();
-    if o.max_boost <= 1 {
+    if o.noise.is_none() && o.max_boost <= 1 {
         return Ok(vec![o.photons; nl]);
     }
     let pilot = units.pilot_photons;
-    let mut events = Vec::with_capacity(nl);
+    let pilot_bins = match o.noise {
+        Some(_) => bins.clone(),
+        None => RadialBins::uniform(1.0, 1),
+    };
+    let mut runs = Vec::with_capacity(nl);
     for i in 0..nl {
         let id = unit_id(prefix, "pilot/", g, lambda_nm[i]);
         let run = runner
@@ -398,18 +439,24 @@ fn photon_counts(
                 mo.threads = o.threads;
                 mo.random_entry = true;
                 mo.cancel = runner.cancel;
-                run_white_sets(&stack, &sets, &RadialBins::uniform(1.0, 1), &mo).with_context(
-                    || {
-                        format!(
-                            "entry {} at {} nm",
-                            entries[plan.groups[g][0]].name, lambda_nm[i]
-                        )
-                    },
-                )
+                run_white_sets(&stack, &sets, &pilot_bins, &mo).with_context(|| {
+                    format!(
+                        "entry {} at {} nm",
+                        entries[plan.groups[g][0]].name, lambda_nm[i]
+                    )
+                })
             })?
             .expect("pilot units are never sharded");
-        events.push((run.scattering_events as f64 / run.photons as f64).max(1.0));
+        runs.push(run);
     }
+    if let Some(target) = &o.noise {
+        let colour = crate::spectral::ColourMap::new(lambda_nm);
+        return Ok(allocate(&runs, bins, &colour.rgb_weights, target));
+    }
+    let events: Vec<f64> = runs
+        .iter()
+        .map(|r| (r.scattering_events as f64 / r.photons as f64).max(1.0))
+        .collect();
     let e_max = events.iter().cloned().fold(1.0, f64::max);
     Ok(events
         .iter()

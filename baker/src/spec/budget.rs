@@ -28,6 +28,7 @@ use super::fiber::FiberSpec;
 use super::limits::BASE_BYTES;
 pub use super::limits::{skin_floor_bytes, GIB};
 use super::{SkinSpec, Spec};
+use crate::spec::skin::profiles::{MAX_SHARE, NOISE_PILOT_MAX};
 
 /// What the bake's flags change about its cost.
 #[derive(Debug, Clone, Copy, Default)]
@@ -172,15 +173,19 @@ fn skin_cost(s: &SkinSpec, o: &Overrides) -> Cost {
         (s.groups, s.largest_group)
     };
     let photons_each = o.photons.unwrap_or(p.photons) as f64;
-    let pilots = if p.max_photon_boost > 1 {
-        20_000.0
+    // At most: a noise target's cap per wavelength and its pilots, or the boost's factor and
+    // its pilots (≤ 20,000).
+    let (most, pilots) = if p.noise_target > 0.0 {
+        (MAX_SHARE as f64, NOISE_PILOT_MAX as f64)
+    } else if p.max_photon_boost > 1 {
+        (p.max_photon_boost as f64, 20_000.0)
     } else {
-        0.0
+        (1.0, 0.0)
     };
     let photons = if o.optics_only {
         0.0
     } else {
-        groups as f64 * nl * (photons_each * p.max_photon_boost as f64 + pilots)
+        groups as f64 * nl * (photons_each * most + pilots)
     };
     let t = o.threads.max(1) as f64;
     let in_flight = 2.0 * 16.0 * t * largest as f64 * (nr + 3.0) * 16.0;

@@ -1,14 +1,44 @@
 //! Henyey–Greenstein phase function: sampler, pdf and inverse, in pbrt's threes.
 
-/// cos θ sampled from HG with anisotropy `g` for a uniform `u` in (0, 1] (Jacques' inversion, as in
-/// MCML's SpinTheta).
+/// Henyey–Greenstein with anisotropy `g`, its constants computed once (the sampler runs at
+/// every scattering event).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hg {
+    pub g: f64,
+    one_minus_g2: f64,
+    one_minus_g: f64,
+    two_g: f64,
+    one_plus_g2: f64,
+    inv_two_g: f64,
+}
+
+impl Hg {
+    pub fn new(g: f64) -> Self {
+        Self {
+            g,
+            one_minus_g2: 1.0 - g * g,
+            one_minus_g: 1.0 - g,
+            two_g: 2.0 * g,
+            one_plus_g2: 1.0 + g * g,
+            inv_two_g: 0.5 / g,
+        }
+    }
+
+    /// cos θ for a uniform `u` in (0, 1] (Jacques' inversion, as in MCML's SpinTheta).
+    #[inline(always)]
+    pub fn sample(&self, u: f64) -> f64 {
+        if self.g.abs() < 1e-6 {
+            return 2.0 * u - 1.0;
+        }
+        let t = self.one_minus_g2 / (self.one_minus_g + self.two_g * u);
+        ((self.one_plus_g2 - t * t) * self.inv_two_g).clamp(-1.0, 1.0)
+    }
+}
+
+/// cos θ sampled from HG with anisotropy `g` for a uniform `u` in (0, 1] ([`Hg::sample`]).
 #[inline]
 pub fn sample_hg(g: f64, u: f64) -> f64 {
-    if g.abs() < 1e-6 {
-        return 2.0 * u - 1.0;
-    }
-    let t = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
-    ((1.0 + g * g - t * t) / (2.0 * g)).clamp(-1.0, 1.0)
+    Hg::new(g).sample(u)
 }
 
 /// HG density in cos θ (integrates to 1 over [−1, 1]).

@@ -92,6 +92,21 @@ impl RadialBins {
     }
 }
 
+/// Radius where the cumulative energy of `rd` (per unit area, on annuli `edges_mm`) first
+/// reaches `target`, interpolating the cumulative linearly in r inside the bin; NaN if never.
+pub fn radius_of_energy(edges_mm: &[f64], rd: impl Iterator<Item = f64>, target: f64) -> f64 {
+    let mut cum = 0.0;
+    for (k, v) in rd.enumerate() {
+        let (a, b) = (edges_mm[k], edges_mm[k + 1]);
+        let e = v * std::f64::consts::PI * (b * b - a * a);
+        if cum + e >= target && e > 0.0 {
+            return a + (b - a) * ((target - cum) / e).clamp(0.0, 1.0);
+        }
+        cum += e;
+    }
+    f64::NAN
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use super::engine::{run_batches, trace, McOptions, Prepared, Scorer};
+use super::engine::{run_batches, trace, Exit, McOptions, Prepared, Scorer, Work};
 use super::radial::RadialBins;
 use super::stack::{Stack, StackError, MAX_LAYERS};
 use super::tally::{McResult, RadialTally};
@@ -45,24 +45,15 @@ struct WhiteScorer {
 
 impl Scorer for WhiteScorer {
     fn absorb(&mut self, _layer: usize, _dw: f64, _pos: &[f64; 3]) {}
-    fn escape(
-        &mut self,
-        top: bool,
-        scattered: bool,
-        weight: f64,
-        pos: &[f64; 3],
-        _cos_out: f64,
-        path: &[f64],
-    ) {
-        let (x, y) = (pos[0], pos[1]);
-        self.run.exit.push(match (top, scattered) {
+    fn escape(&mut self, e: &Exit) {
+        self.run.exit.push(match (e.top, e.scattered) {
             (true, true) => 0,
             (true, false) => 1,
             (false, _) => 2,
         });
-        self.run.r_mm.push((x * x + y * y).sqrt());
-        self.run.weight.push(weight);
-        self.run.path_mm.extend_from_slice(path);
+        self.run.r_mm.push(e.radius_mm());
+        self.run.weight.push(e.weight);
+        self.run.path_mm.extend_from_slice(e.path);
     }
     fn lost(&mut self, _weight: f64) {}
     fn photon_done(&mut self) {
@@ -116,11 +107,11 @@ pub fn run_white(stack: &Stack, mua_ref_per_mm: &[f64], o: &McOptions) -> anyhow
         |b, n| {
             let mut rng = batch_rng(o.seed, b);
             let mut s = WhiteScorer::default();
-            let mut events = 0;
+            let mut work = Work::default();
             for _ in 0..n {
-                trace::<true, _>(&p, &mua_ref, &mut rng, &mut s, &mut events);
+                trace::<true, _>(&p, &mua_ref, &mut rng, &mut s, &mut work);
             }
-            s.run.scattering_events = events;
+            s.run.scattering_events = work.events;
             s.run
         },
         |r| {
@@ -185,7 +176,7 @@ pub struct SetTally {
 }
 
 impl SetTally {
-    fn new(nr: usize) -> Self {
+    pub(crate) fn new(nr: usize) -> Self {
         Self {
             rd: Sums::default(),
             rd_unscattered: Sums::default(),
@@ -194,7 +185,22 @@ impl SetTally {
         }
     }
 
-    fn merge(&mut self, o: &SetTally) {
+    /// Scores an exit of weight `w` (absorption applied), in radial bin `bin`.
+    #[inline]
+    pub(crate) fn add(&mut self, e: &Exit, bin: Option<usize>, w: f64) {
+        match (e.top, e.scattered) {
+            (true, true) => {
+                self.rd.add(w);
+                if let Some(k) = bin {
+                    self.rd_r[k].add(w);
+                }
+            }
+            (true, false) => self.rd_unscattered.add(w),
+            (false, _) => self.tt.add(w),
+        }
+    }
+
+    pub(crate) fn merge(&mut self, o: &SetTally) {
         self.rd.merge(&o.rd);
         self.rd_unscattered.merge(&o.rd_unscattered);
         self.tt.merge(&o.tt);
@@ -212,13 +218,15 @@ pub struct WhiteSets {
     pub rsp: f64,
     pub sets: Vec<SetTally>,
     pub scattering_events: u64,
+    /// Evaluations of the junction's height field (0 without one).
+    #[serde(default)]
+    pub junction_evals: u64,
     pub threads: usize,
     pub seconds: f64,
 }
 
 struct SetsScorer<'a> {
     mua: &'a [[f64; MAX_LAYERS]],
-    nl: usize,
     bins: &'a RadialBins,
     sets: Vec<SetTally>,
     photons: u64,
@@ -226,40 +234,29 @@ struct SetsScorer<'a> {
 
 impl Scorer for SetsScorer<'_> {
     fn absorb(&mut self, _layer: usize, _dw: f64, _pos: &[f64; 3]) {}
-    fn escape(
-        &mut self,
-        top: bool,
-        scattered: bool,
-        weight: f64,
-        pos: &[f64; 3],
-        _cos_out: f64,
-        path: &[f64],
-    ) {
-        let bin = if top && scattered {
-            self.bins.index((pos[0] * pos[0] + pos[1] * pos[1]).sqrt())
+    fn escape(&mut self, e: &Exit) {
+        let bin = if e.top && e.scattered {
+            self.bins.index(e.radius_mm())
         } else {
             None
         };
         for (t, mua) in self.sets.iter_mut().zip(self.mua) {
             // Microscopic Beer–Lambert: the packet's weight under this set's absorption.
-            let tau: f64 = (0..self.nl).map(|i| path[i] * mua[i]).sum();
-            let w = weight * (-tau).exp();
-            match (top, scattered) {
-                (true, true) => {
-                    t.rd.add(w);
-                    if let Some(k) = bin {
-                        t.rd_r[k].add(w);
-                    }
-                }
-                (true, false) => t.rd_unscattered.add(w),
-                (false, _) => t.tt.add(w),
-            }
+            t.add(e, bin, e.weight * beer_lambert(e.path, mua));
         }
     }
     fn lost(&mut self, _weight: f64) {}
     fn photon_done(&mut self) {
         self.photons += 1;
     }
+}
+
+/// exp(−Σᵢ μa,i·Li): the weight a packet that travelled `path_mm` keeps under absorption
+/// `mua_per_mm` (microscopic Beer–Lambert).
+#[inline(always)]
+pub(crate) fn beer_lambert(path_mm: &[f64], mua_per_mm: &[f64]) -> f64 {
+    let tau: f64 = path_mm.iter().zip(mua_per_mm).map(|(l, m)| l * m).sum();
+    (-tau).exp()
 }
 
 /// Everything [`run_white_sets`] requires of its inputs: a valid stack, at least one set, one
@@ -324,6 +321,7 @@ pub fn run_white_sets(
         rsp: p.rsp,
         sets: vec![SetTally::new(bins.len()); sets.len()],
         scattering_events: 0,
+        junction_evals: 0,
         threads: 0,
         seconds: 0.0,
     };
@@ -334,20 +332,20 @@ pub fn run_white_sets(
             let mut rng = batch_rng(o.seed, b);
             let mut s = SetsScorer {
                 mua: &mua,
-                nl: p.nl,
                 bins,
                 sets: vec![SetTally::new(bins.len()); sets.len()],
                 photons: 0,
             };
-            let mut events = 0;
+            let mut work = Work::default();
             for _ in 0..n {
-                trace::<true, _>(&p, &mua_ref, &mut rng, &mut s, &mut events);
+                trace::<true, _>(&p, &mua_ref, &mut rng, &mut s, &mut work);
             }
-            (s.photons, events, s.sets)
+            (s.photons, work, s.sets)
         },
-        |(photons, events, sets)| {
+        |(photons, work, sets)| {
             all.photons += photons;
-            all.scattering_events += events;
+            all.scattering_events += work.events;
+            all.junction_evals += work.junction_evals;
             for (a, b) in all.sets.iter_mut().zip(&sets) {
                 a.merge(b);
             }

@@ -137,8 +137,16 @@ fn profiles(
     let bins = RadialBins::fine_then_log(settings.dr_min_mm, settings.growth, settings.r_max_mm);
     let plan = profile::plan(entries, lam.len(), !a.no_reuse);
     let n_sims = plan.groups.len() * lam.len();
+    let packets = if settings.noise_target > 0.0 {
+        format!(
+            "packets per wavelength for ≤ {} % noise against {photons} everywhere",
+            settings.noise_target * 100.0
+        )
+    } else {
+        format!("{photons} photons")
+    };
     runner.events.say(format!(
-        "{}: {} entries in {} simulation groups × {} wavelengths = {n_sims} simulations of {photons} photons",
+        "{}: {} entries in {} simulation groups × {} wavelengths = {n_sims} simulations of {packets}",
         job.path.display(),
         entries.len(),
         plan.groups.len(),
@@ -150,6 +158,7 @@ fn profiles(
         seed: settings.seed,
         threads: a.threads,
         max_boost: settings.max_photon_boost,
+        noise: profile::NoiseTarget::new(settings.noise_target, photons),
         progress: reporter(&bar),
     };
     let t_sim = Instant::now();
@@ -325,6 +334,7 @@ fn write_manifest(
         "seed": s.seed,
         "gaussians": s.gaussians,
         "max_photon_boost": s.max_photon_boost,
+        "noise_target": s.noise_target,
         "radial": {
             "dr_min_mm": s.dr_min_mm,
             "growth": s.growth,

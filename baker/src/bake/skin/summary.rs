@@ -4,6 +4,7 @@ use std::time::Instant;
 
 use crate::bake::job::Job;
 use crate::profile::{self, RgbProfile, SpectralProfile};
+use crate::spec::skin::profiles::NOISE_R_MAX_MM;
 
 /// The summary of a profile bake for people: photons, speed, and per channel the worst fit
 /// error and the worst relative standard error. `seconds` are (simulation, fits).
@@ -42,18 +43,25 @@ pub(super) fn print(
         // Largest relative standard error of the channel's profile out to 2 mm, inside the
         // channel's 99 % radius (beyond it a channel may cross zero: deep-red light is out of
         // the sRGB gamut, so G and B tails are tiny and can be negative).
-        let (ks, se) = rgb
+        let per_entry: Vec<f64> = rgb
             .iter()
             .enumerate()
-            .map(|(k, r)| (k, max_relative_se(&spectral[k].r_edges_mm, r, c, 2.0)))
+            .map(|(k, r)| max_relative_se(&spectral[k].r_edges_mm, r, c, NOISE_R_MAX_MM))
+            .collect();
+        let (ks, se) = per_entry
+            .iter()
+            .copied()
+            .enumerate()
             .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+        let within = per_entry.iter().filter(|&&x| x <= 0.01).count();
         events.say(format!(
-            "  {}: worst fit error {:.2} % ({}), worst relative SE for r ≤ min(2 mm, r99) {:.2} % ({})",
+            "  {}: worst fit error {:.2} % ({}), worst relative SE for r ≤ min(2 mm, r99) {:.2} % ({}), ≤ 1 % for {within} of {} entries",
             ["R", "G", "B"][c],
             100.0 * worst,
             entries[k].name,
             100.0 * se,
-            entries[ks].name
+            entries[ks].name,
+            per_entry.len()
         ));
     }
 }

@@ -35,6 +35,7 @@ pub fn tables(
             ("seed".into(), settings.seed.into()),
             ("gaussians".into(), (settings.gaussians as u64).into()),
             ("max_photon_boost".into(), settings.max_photon_boost.into()),
+            ("noise_target".into(), settings.noise_target.into()),
             ("absorption_reuse".into(), (!a.no_reuse).to_string().into()),
             (
                 "entries".into(),

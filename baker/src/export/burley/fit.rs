@@ -199,7 +199,7 @@ pub fn fit_rgb(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::profile::rgb::radius_of_energy;
+    use crate::transport::radial::radius_of_energy;
     use crate::transport::RadialBins;
 
     /// Annulus averages of Burley (A, d) on `edges`, as the bake writes them.

@@ -68,7 +68,7 @@ pub fn fit_entry(table: &ProfileTable, index: &TableIndex, name: &str) -> anyhow
     let r99_mm: [f64; 3] = match f64s("r99_mm")? {
         Some(v) if v.len() == 3 => [v[0], v[1], v[2]],
         _ => std::array::from_fn(|c| {
-            crate::profile::rgb::radius_of_energy(
+            crate::transport::radial::radius_of_energy(
                 &data.r_edges_mm,
                 data.rd_rgb_per_mm2.iter().map(|v| v[c]),
                 0.99 * data.albedo_rgb[c],

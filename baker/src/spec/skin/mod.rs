@@ -8,7 +8,7 @@ mod cx;
 mod merge;
 mod overrides;
 mod params;
-mod profiles;
+pub mod profiles;
 pub mod raw;
 mod resolve;
 mod sweep;

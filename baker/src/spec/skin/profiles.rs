@@ -18,6 +18,10 @@ pub struct ProfileSettings {
     pub gaussians: usize,
     /// Cheap wavelengths get up to this many times `photons` ([`crate::profile::SimOptions`]).
     pub max_photon_boost: u64,
+    /// Relative standard error the RGB profile bins (r ≤ min(2 mm, r99)) may relax to, never
+    /// above what `photons` at every wavelength would give; packets per wavelength are then
+    /// allocated from pilot runs (`profile::allocate`). 0: `photons` everywhere.
+    pub noise_target: f64,
     /// Radial grid: bins of `dr_min_mm`, then each `growth` times wider, up to `r_max_mm`.
     pub dr_min_mm: f64,
     pub growth: f64,
@@ -35,6 +39,7 @@ impl Default for ProfileSettings {
             seed: 1,
             gaussians: 6,
             max_photon_boost: 1,
+            noise_target: DEFAULT_NOISE_TARGET,
             dr_min_mm: 0.01,
             growth: 1.05,
             r_max_mm: 40.0,
@@ -44,6 +49,20 @@ impl Default for ProfileSettings {
 
 /// Default photons per wavelength and shared simulation.
 pub const DEFAULT_PROFILE_PHOTONS: u64 = 4_000_000;
+
+/// Default noise target: 1 % relative standard error (README "Diffusion profiles").
+pub const DEFAULT_NOISE_TARGET: f64 = 0.01;
+
+/// Radius out to which a noise target holds, mm (profile/DECISIONS.md row 7).
+pub const NOISE_R_MAX_MM: f64 = 2.0;
+
+/// Under a noise target a wavelength gets at least 1/`MIN_SHARE` of `photons` (so every
+/// spectral profile keeps some precision) and at most `MAX_SHARE` times them.
+pub const MIN_SHARE: u64 = 10;
+pub const MAX_SHARE: u64 = 4;
+
+/// Packets of a noise target's pilot run per wavelength: 2.5 % of `photons`, at most this.
+pub const NOISE_PILOT_MAX: u64 = 100_000;
 
 impl SkinCx {
     pub(super) fn profiles(&mut self, raw: &RawSpec, limits: &Limits) -> ProfileSettings {
@@ -63,6 +82,23 @@ impl SkinCx {
         }
         if let Some(n) = self.whole("profiles.max_photon_boost", &p.max_photon_boost, 1.0, 64.0) {
             s.max_photon_boost = n;
+        }
+        s.noise_target = self.opt_range(
+            "profiles.noise_target",
+            &p.noise_target,
+            0.0,
+            0.5,
+            false,
+            s.noise_target,
+        );
+        if s.noise_target > 0.0 && s.max_photon_boost > 1 {
+            if let Some(b) = &p.max_photon_boost {
+                self.invalid(
+                    loc(b),
+                    "profiles.max_photon_boost",
+                    "a boost applies without a noise target only; set `noise_target: 0` to use it",
+                );
+            }
         }
         if let Some(r) = &p.radial {
             self.radial(r, limits, &mut s);

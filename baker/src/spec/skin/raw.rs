@@ -35,6 +35,7 @@ pub struct RawProfiles {
     pub seed: Option<Spanned<f64>>,
     pub gaussians: Option<Spanned<f64>>,
     pub max_photon_boost: Option<Spanned<f64>>,
+    pub noise_target: Option<Spanned<f64>>,
     pub radial: Option<Spanned<RawRadial>>,
 }
 

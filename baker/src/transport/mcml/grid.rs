@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use super::mci::McmlRun;
 use crate::math::rng::batch_rng;
-use crate::transport::engine::{run_batches, trace, DirectScorer, McOptions, Prepared, Scorer};
+use crate::transport::engine::{
+    run_batches, trace, DirectScorer, Exit, McOptions, Prepared, Scorer, Work,
+};
 use crate::transport::stack::MAX_LAYERS;
 use crate::transport::tally::{McResult, RadialTally};
 
@@ -45,22 +47,13 @@ impl Scorer for GridScorer<'_> {
         let ir = self.ir(pos);
         self.grid.a_rz[ir * self.nz + iz] += dw;
     }
-    fn escape(
-        &mut self,
-        top: bool,
-        scattered: bool,
-        weight: f64,
-        pos: &[f64; 3],
-        cos_out: f64,
-        path: &[f64],
-    ) {
-        self.direct
-            .escape(top, scattered, weight, pos, cos_out, path);
-        let k = self.ir(pos) * self.na + self.ia(cos_out);
-        if top {
-            self.grid.rd_ra[k] += weight;
+    fn escape(&mut self, e: &Exit) {
+        self.direct.escape(e);
+        let k = self.ir(&e.pos) * self.na + self.ia(e.cos_out);
+        if e.top {
+            self.grid.rd_ra[k] += e.weight;
         } else {
-            self.grid.tt_ra[k] += weight;
+            self.grid.tt_ra[k] += e.weight;
         }
     }
     fn lost(&mut self, weight: f64) {
@@ -97,7 +90,7 @@ pub fn simulate_grid(run: &McmlRun, o: &McOptions) -> anyhow::Result<(McResult, 
         |b, n| {
             let mut rng = batch_rng(o.seed, b);
             let mut t = RadialTally::new(p.nl, p.nr);
-            let mut events = 0;
+            let mut work = Work::default();
             let g = {
                 let mut s = GridScorer {
                     direct: DirectScorer {
@@ -114,11 +107,11 @@ pub fn simulate_grid(run: &McmlRun, o: &McOptions) -> anyhow::Result<(McResult, 
                     da: 0.5 * PI / na as f64,
                 };
                 for _ in 0..n {
-                    trace::<false, _>(&p, &no_ref, &mut rng, &mut s, &mut events);
+                    trace::<false, _>(&p, &no_ref, &mut rng, &mut s, &mut work);
                 }
                 s.grid
             };
-            t.scattering_events = events;
+            t.scattering_events = work.events;
             (t, g)
         },
         |(t, g)| {
