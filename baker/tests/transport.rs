@@ -192,6 +192,7 @@ impl WithoutJunction for Stack {
 /// 3.5 SE, χ² over the radial bins.
 #[test]
 fn absorption_reuse_matches_direct_simulation() {
+    let (mut chi2, mut dof) = (0.0, 0usize);
     for (k, lambda) in [415.0, 550.0, 650.0].into_iter().enumerate() {
         let light = skin_stack(SkinType::I, lambda, 30.0);
         let dark = skin_stack(SkinType::VI, lambda, 30.0);
@@ -236,25 +237,26 @@ fn absorption_reuse_matches_direct_simulation() {
                 let se = (sw * sw + sd * sd).sqrt();
                 within(w, d, 3.5 * se + 1e-9, &format!("{name} at {lambda} nm"));
             }
-            // χ² over the radial bins out to 2 mm: the white run's roulette (on the reference
-            // weight, at 1e-2) and the reuse leave every bin's mean unchanged.
-            let (mut chi2, mut dof) = (0.0, 0usize);
+            // χ² over the radial bins out to 2 mm that both runs resolve (relative SE < 20 %:
+            // sparser bins of dark skin's tail have skewed, underestimated errors at this
+            // packet count), pooled over wavelengths and types below.
             for k in 0..reused.rd_r_per_mm2.len().min(200) {
+                let (w, d) = (reused.rd_r_per_mm2[k], direct.rd_r_per_mm2[k]);
                 let (sw, sd) = (reused.rd_r_per_mm2_se[k], direct.rd_r_per_mm2_se[k]);
-                if sw > 0.0 && sd > 0.0 {
-                    let z = (reused.rd_r_per_mm2[k] - direct.rd_r_per_mm2[k])
-                        / (sw * sw + sd * sd).sqrt();
+                if sw > 0.0 && sd > 0.0 && sw < 0.2 * w && sd < 0.2 * d {
+                    let z = (w - d) / (sw * sw + sd * sd).sqrt();
+                    assert!(z.abs() < 5.0, "bin {k} at {lambda} nm: z = {z}");
                     chi2 += z * z;
                     dof += 1;
                 }
             }
-            let mean = chi2 / dof as f64;
-            assert!(
-                dof > 100 && (mean - 1.0).abs() < 5.0 * (2.0 / dof as f64).sqrt(),
-                "χ²/dof = {mean} over {dof} radial bins at {lambda} nm"
-            );
         }
     }
+    let mean = chi2 / dof as f64;
+    assert!(
+        dof > 300 && (mean - 1.0).abs() < 5.0 * (2.0 / dof as f64).sqrt(),
+        "χ²/dof = {mean} over {dof} radial bins"
+    );
 }
 
 #[test]
