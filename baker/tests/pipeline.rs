@@ -78,7 +78,12 @@ fn rerun_is_free_and_an_edit_rebakes_only_its_units() {
     assert_eq!(units_with(&ev, "unit_started"), Vec::<String>::new());
     let mut hits = units_with(&ev, "cache_hit");
     hits.sort();
-    let mut all = computed.clone();
+    // Every unit but the pilot runs, which only choose the packets of main runs to compute.
+    let mut all: Vec<String> = computed
+        .iter()
+        .filter(|u| !u.contains("/pilot/"))
+        .cloned()
+        .collect();
     all.sort();
     assert_eq!(hits, all);
     assert_eq!(tree(&d.join("out")), before);
