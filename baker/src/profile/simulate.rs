@@ -14,7 +14,7 @@ use formats::OpticsEntry;
 use super::allocate::{allocate, NoiseTarget};
 use crate::math::rng::{digest_words, group_wavelength_seed};
 use crate::pipeline::{Cache, CacheMode, Events, Key, KeyBuilder, Runner};
-use crate::spec::skin::profiles::NOISE_PILOT_MAX;
+use crate::spec::skin::profiles::{BOOST_PILOT_MAX, NOISE_PILOT_MAX};
 use crate::transport::white::{SetTally, WhiteSets};
 use crate::transport::{self, run_white_sets, McOptions, RadialBins, Stack};
 
@@ -390,7 +390,9 @@ fn pilot_photons(o: &SimOptions) -> u64 {
             .clamp(2_000, NOISE_PILOT_MAX)
             .min(o.photons)
     } else {
-        (o.photons / 100).clamp(2_000, 20_000).min(o.photons)
+        (o.photons / 100)
+            .clamp(2_000, BOOST_PILOT_MAX)
+            .min(o.photons)
     }
 }
 

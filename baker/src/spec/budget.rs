@@ -28,7 +28,7 @@ use super::fiber::FiberSpec;
 use super::limits::BASE_BYTES;
 pub use super::limits::{skin_floor_bytes, GIB};
 use super::{SkinSpec, Spec};
-use crate::spec::skin::profiles::{MAX_SHARE, NOISE_PILOT_MAX};
+use crate::spec::skin::profiles::{BOOST_PILOT_MAX, MAX_SHARE, NOISE_PILOT_MAX};
 
 /// What the bake's flags change about its cost.
 #[derive(Debug, Clone, Copy, Default)]
@@ -174,11 +174,11 @@ fn skin_cost(s: &SkinSpec, o: &Overrides) -> Cost {
     };
     let photons_each = o.photons.unwrap_or(p.photons) as f64;
     // At most: a noise target's cap per wavelength and its pilots, or the boost's factor and
-    // its pilots (≤ 20,000).
+    // its pilots.
     let (most, pilots) = if p.noise_target > 0.0 {
         (MAX_SHARE as f64, NOISE_PILOT_MAX as f64)
     } else if p.max_photon_boost > 1 {
-        (p.max_photon_boost as f64, 20_000.0)
+        (p.max_photon_boost as f64, BOOST_PILOT_MAX as f64)
     } else {
         (1.0, 0.0)
     };

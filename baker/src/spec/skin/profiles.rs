@@ -64,6 +64,9 @@ pub const MAX_SHARE: u64 = 4;
 /// Packets of a noise target's pilot run per wavelength: 2.5 % of `photons`, at most this.
 pub const NOISE_PILOT_MAX: u64 = 100_000;
 
+/// Packets of a photon boost's pilot run per wavelength: 1 % of `photons`, at most this.
+pub const BOOST_PILOT_MAX: u64 = 20_000;
+
 impl SkinCx {
     pub(super) fn profiles(&mut self, raw: &RawSpec, limits: &Limits) -> ProfileSettings {
         let mut s = ProfileSettings::default();
