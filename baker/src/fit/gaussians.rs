@@ -67,39 +67,65 @@ struct Channel {
     total: f64,
 }
 
+/// Energies of the Gaussians per bin, row-major: `rows[k·m + i]` for bin k, Gaussian i.
+struct Basis {
+    m: usize,
+    rows: Vec<f64>,
+}
+
+impl Basis {
+    #[inline]
+    fn row(&self, k: usize) -> &[f64] {
+        &self.rows[k * self.m..(k + 1) * self.m]
+    }
+}
+
 struct Problem<'a> {
     edges_mm: &'a [f64],
     channels: Vec<Channel>,
 }
 
 impl Problem<'_> {
-    /// Energy of each Gaussian in each bin: B[k][i].
-    fn basis(&self, v: &[f64], n: usize) -> Vec<Vec<f64>> {
-        (0..n)
-            .map(|k| {
-                v.iter()
-                    .map(|&vi| gaussian_energy(vi, self.edges_mm[k], self.edges_mm[k + 1]))
-                    .collect()
-            })
-            .collect()
+    /// Energy of each Gaussian in each bin: B[k][i] = E(edge k) − E(edge k + 1) with
+    /// E(r) = exp(−r²/2v), each edge's exponentials computed once (the same values
+    /// [`gaussian_energy`] gives bin by bin).
+    fn basis(&self, v: &[f64], n: usize) -> Basis {
+        let m = v.len();
+        let tail = |r: f64| v.iter().map(move |&vi| (-r * r / (2.0 * vi)).exp());
+        let mut upper: Vec<f64> = tail(self.edges_mm[0]).collect();
+        let mut rows = Vec::with_capacity(n * m);
+        for k in 0..n {
+            for (i, lower) in tail(self.edges_mm[k + 1]).enumerate() {
+                rows.push(upper[i] - lower);
+                upper[i] = lower;
+            }
+        }
+        Basis { m, rows }
     }
 
-    /// L1-optimal non-negative weights of one channel for basis `b`, and its error.
-    fn weights(&self, b: &[Vec<f64>], ch: &Channel) -> (Vec<f64>, f64) {
-        let m = b.first().map_or(0, |r| r.len());
+    /// L1-optimal non-negative weights of one channel for the first `ch.n` rows of basis `b`,
+    /// and its error.
+    fn weights(&self, b: &Basis, ch: &Channel) -> (Vec<f64>, f64) {
+        let m = b.m;
         let e = &ch.energy[..ch.n];
         let floor = 1e-9 * ch.total.abs().max(1e-300);
         // Start from relative least squares, then reweight by 1/|residual| (IRLS for L1).
         let mut d: Vec<f64> = e.iter().map(|x| 1.0 / x.abs().max(floor)).collect();
         let mut best = (vec![0.0; m], f64::INFINITY);
+        let mut g = vec![vec![0.0; m]; m];
+        let mut h = vec![0.0; m];
+        let mut res = vec![0.0; e.len()];
         for _ in 0..25 {
-            let mut g = vec![vec![0.0; m]; m];
-            let mut h = vec![0.0; m];
-            for ((row, &ek), &dk) in b.iter().zip(e).zip(&d) {
+            g.iter_mut().for_each(|r| r.fill(0.0));
+            h.fill(0.0);
+            for (k, (&ek, &dk)) in e.iter().zip(&d).enumerate() {
+                let row = b.row(k);
                 for i in 0..m {
-                    h[i] += dk * row[i] * ek;
+                    let di = dk * row[i];
+                    h[i] += di * ek;
+                    let gi = &mut g[i];
                     for j in 0..=i {
-                        g[i][j] += dk * row[i] * row[j];
+                        gi[j] += di * row[j];
                     }
                 }
             }
@@ -109,11 +135,9 @@ impl Problem<'_> {
                 }
             }
             let w = nnls_normal(&g, &h);
-            let res: Vec<f64> = b
-                .iter()
-                .zip(e)
-                .map(|(row, ek)| row.iter().zip(&w).map(|(a, w)| a * w).sum::<f64>() - ek)
-                .collect();
+            for (k, (r, ek)) in res.iter_mut().zip(e).enumerate() {
+                *r = b.row(k).iter().zip(&w).map(|(a, w)| a * w).sum::<f64>() - ek;
+            }
             let err = res.iter().map(|r| r.abs()).sum::<f64>() / ch.total;
             if err < best.1 * (1.0 - 1e-6) {
                 best = (w, err);
@@ -121,7 +145,9 @@ impl Problem<'_> {
                 break;
             }
             let eps = floor.max(1e-4 * best.1 * ch.total / e.len() as f64);
-            d = res.iter().map(|r| 1.0 / r.abs().max(eps)).collect();
+            for (dk, r) in d.iter_mut().zip(&res) {
+                *dk = 1.0 / r.abs().max(eps);
+            }
         }
         best
     }
@@ -134,24 +160,29 @@ impl Problem<'_> {
         let b = self.basis(&v, n_max);
         let m = v.len();
         let mut total = 0.0;
+        let mut g = vec![vec![0.0; m]; m];
+        let mut h = vec![0.0; m];
         for ch in &self.channels {
-            let rows = &b[..ch.n];
             let e = &ch.energy[..ch.n];
-            let mut g = vec![vec![0.0; m]; m];
-            let mut h = vec![0.0; m];
-            for (row, &ek) in rows.iter().zip(e) {
+            g.iter_mut().for_each(|r| r.fill(0.0));
+            h.fill(0.0);
+            for (k, &ek) in e.iter().enumerate() {
+                let row = b.row(k);
                 for i in 0..m {
                     h[i] += row[i] * ek;
+                    let gi = &mut g[i];
                     for j in 0..m {
-                        g[i][j] += row[i] * row[j];
+                        gi[j] += row[i] * row[j];
                     }
                 }
             }
             let w = nnls_normal(&g, &h);
-            let ss: f64 = rows
+            let ss: f64 = e
                 .iter()
-                .zip(e)
-                .map(|(row, ek)| (row.iter().zip(&w).map(|(a, w)| a * w).sum::<f64>() - ek).powi(2))
+                .enumerate()
+                .map(|(k, ek)| {
+                    (b.row(k).iter().zip(&w).map(|(a, w)| a * w).sum::<f64>() - ek).powi(2)
+                })
                 .sum();
             total += ss.sqrt() / ch.total.abs().max(1e-300);
         }
@@ -165,7 +196,7 @@ impl Problem<'_> {
         let mut ws = Vec::new();
         let mut errs = [0.0; 3];
         for (c, ch) in self.channels.iter().enumerate() {
-            let (w, e) = self.weights(&b[..ch.n], ch);
+            let (w, e) = self.weights(&b, ch);
             ws.push(w);
             errs[c] = e;
         }

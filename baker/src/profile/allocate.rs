@@ -63,7 +63,9 @@ impl NoiseTarget {
 /// runs of the default database's age-30 group (100,000 packets each, one thread: 0.080 µs per
 /// event, 0.052 µs per junction evaluation, 0.91 µs per packet; rms residual 4.6 %). Deterministic
 /// counts, not measured time, so that the allocation and hence the results are the same on
-/// every machine.
+/// every machine. The faster junction search of 2026-12-02 (second record) needs fewer
+/// evaluations per crossing but costs about the same per evaluation (50 vs 55 ns on 3·10⁶ rays
+/// recorded from the age-30 bake), so the constant stands.
 const PACKET_OVERHEAD_EVENTS: f64 = 11.0;
 const JUNCTION_EVAL_EVENTS: f64 = 0.65;
 

@@ -11,7 +11,7 @@ use super::junction::HeightField;
 use super::phase::Hg;
 use super::stack::{Stack, StackError, MAX_LAYERS};
 use super::tally::{McResult, RadialTally};
-use crate::math::rng::{batch_rng, uniform, BatchRng};
+use crate::math::rng::{batch_rng, symmetric_pair, uniform, BatchRng};
 
 /// Russian roulette: packets below this weight play (MCML's WEIGHT = 1e-4)…
 pub const ROULETTE_WEIGHT: f64 = 1e-4;
@@ -168,6 +168,7 @@ impl Prepared {
         pos: &[f64; 3],
         u: &[f64; 3],
         step: f64,
+        leaving_slope: f64,
         evals: &mut u64,
     ) -> (f64, Hit) {
         // Common case first: the step ends inside a planar layer; no division needed.
@@ -202,7 +203,7 @@ impl Prepared {
             } else {
                 best.0.min(step)
             };
-            match hf.hit_counted(*pos, *u, t_max, side, evals) {
+            match hf.hit_counted(*pos, *u, t_max, side, leaving_slope, evals) {
                 Some(t) => return (t, Hit::Junction),
                 None if planar_is_junction => return (f64::INFINITY, Hit::Junction),
                 None => {}
@@ -252,8 +253,7 @@ fn spin(u: &mut [f64; 3], hg: &Hg, rng: &mut BatchRng) {
         // Isotropic (the thesis transports μs′ with g = 0): the new direction does not depend
         // on the old one, so sample the sphere directly (Marsaglia 1972) with no rotation.
         loop {
-            let a = 2.0 * uniform(rng.next_u64()) - 1.0;
-            let b = 2.0 * uniform(rng.next_u64()) - 1.0;
+            let (a, b) = symmetric_pair(rng.next_u64());
             let s = a * a + b * b;
             if s < 1.0 {
                 let k = 2.0 * (1.0 - s).sqrt();
@@ -266,8 +266,7 @@ fn spin(u: &mut [f64; 3], hg: &Hg, rng: &mut BatchRng) {
     let sint = (1.0 - cost * cost).max(0.0).sqrt();
     // Uniform azimuth without trigonometry: a point in the unit disk gives angle 2φ.
     let (cosp, sinp) = loop {
-        let a = 2.0 * uniform(rng.next_u64()) - 1.0;
-        let b = 2.0 * uniform(rng.next_u64()) - 1.0;
+        let (a, b) = symmetric_pair(rng.next_u64());
         let r2 = a * a + b * b;
         if r2 <= 1.0 && r2 > 1e-12 {
             let inv = 1.0 / r2;
@@ -306,6 +305,9 @@ struct Packet {
     log_w_ref: f64,
     /// Boundary hits since the last interaction.
     bounces: u32,
+    /// After a junction crossing or reflection, the slope at which the packet leaves the
+    /// surface ([`HeightField::leaving_slope`]); 0 otherwise.
+    leaving_slope: f64,
 }
 
 impl Packet {
@@ -329,6 +331,7 @@ impl Packet {
             path: [0.0f64; MAX_LAYERS],
             log_w_ref: w.ln(),
             bounces: 0u32,
+            leaving_slope: 0.0,
         }
     }
 
@@ -418,6 +421,8 @@ impl Packet {
             *u = [t[0] * inv, t[1] * inv, t[2] * inv];
             self.layer = other;
         }
+        let side = if self.layer == *ju { -1.0 } else { 1.0 };
+        self.leaving_slope = HeightField::leaving_slope(nv, *u, side);
         // Step off the surface so the next search starts on the right side.
         for k in 0..3 {
             pos[k] += u[k] * 1e-9;
@@ -526,7 +531,8 @@ pub(crate) fn trace<const WHITE: bool, S: Scorer>(
             } else {
                 p.inv_mut[layer]
             };
-        let (db, hit) = p.boundary(layer, &k.pos, &k.u, step, &mut work.junction_evals);
+        let leaving = std::mem::take(&mut k.leaving_slope);
+        let (db, hit) = p.boundary(layer, &k.pos, &k.u, step, leaving, &mut work.junction_evals);
         if db.is_infinite() && step.is_infinite() {
             // Travelling parallel to the layers through a clear layer: it never arrives (MCML
             // kills such packets too).

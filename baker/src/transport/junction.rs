@@ -1,9 +1,10 @@
 //! The non-planar dermo-epidermal junction of thesis Eq. 1 as a height field:
 //! J(x, y) = z̄ + A·sin(ωx·x + φx)·sin(ωy·y + φy).
 //!
-//! Ray intersection marches with a bound on the curvature of the signed vertical distance
-//! along the ray, so the first crossing along a segment is never stepped over, then refines
-//! by regula falsi.
+//! Ray intersection marches with lower bounds on the signed vertical distance along the ray
+//! (the curvature of the whole surface, and envelopes that keep one of its two frequencies),
+//! so the first crossing along a segment is never stepped over. Once an upper bound brackets
+//! a unique crossing, Newton's method inside a shrinking bracket finds it.
 
 use super::stack::Junction;
 
@@ -28,8 +29,8 @@ pub const MIN_STEP_MM: f64 = 2e-4;
 /// evaluations per crossing at 10⁻¹²).
 const ROOT_TOL_MM: f64 = 1e-10;
 
-/// Newton steps before the search falls back to the bracketed refinement (they converge
-/// quadratically, so this bounds only degenerate cases).
+/// Newton steps of the bracketed polish at most (they converge quadratically, so this bounds
+/// only degenerate cases).
 const MAX_NEWTON_STEPS: u32 = 32;
 
 /// sin and cos of `x` for the height field: quadrant reduction (Cody–Waite, π/2 split in
@@ -41,30 +42,28 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     const P1: f64 = 1.570_796_325_802_803;
     const P2: f64 = 9.920_935_791_635_221e-10;
     const P3: f64 = 5.170_182_981_794_105e-19;
-    // Round to the nearest quadrant with an integer cast (f64::round is a library call on
-    // baseline x86-64), the ±½ by copysign rather than a branch on the sign.
+    // Round to the nearest quadrant by the 1.5·2⁵² shifter: adding it leaves the rounded
+    // quotient in the low mantissa bits (|q| < 2⁵¹), with no float–integer conversions.
+    const SHIFTER: f64 = 6_755_399_441_055_744.0;
     let q = x * std::f64::consts::FRAC_2_PI;
-    let ki = (q + 0.5f64.copysign(q)) as i64;
-    let k = ki as f64;
+    let shifted = q + SHIFTER;
+    let ki = shifted.to_bits() as i64;
+    let k = shifted - SHIFTER;
     let r = ((x - k * P1) - k * P2) - k * P3;
-    let r2 = r * r;
-    // sin r = r − r³/3! + … − r¹⁵/15!,  cos r = 1 − r²/2! + … − r¹⁴/14!
-    let s = r
-        * (1.0
-            + r2 * (-1.0 / 6.0
-                + r2 * (1.0 / 120.0
-                    + r2 * (-1.0 / 5040.0
-                        + r2 * (1.0 / 362_880.0
-                            + r2 * (-1.0 / 39_916_800.0
-                                + r2 * (1.0 / 6_227_020_800.0
-                                    + r2 * (-1.0 / 1_307_674_368_000.0))))))));
-    let c = 1.0
-        + r2 * (-0.5
-            + r2 * (1.0 / 24.0
-                + r2 * (-1.0 / 720.0
-                    + r2 * (1.0 / 40_320.0
-                        + r2 * (-1.0 / 3_628_800.0
-                            + r2 * (1.0 / 479_001_600.0 + r2 * (-1.0 / 87_178_291_200.0)))))));
+    let z = r * r;
+    let z2 = z * z;
+    let z4 = z2 * z2;
+    // sin r = r·Σ (−1)ⁿ zⁿ/(2n+1)!, cos r = Σ (−1)ⁿ zⁿ/(2n)!, z = r², n ≤ 7, evaluated by Estrin's
+    // scheme (independent pairs, then powers of z) for a short dependency chain.
+    let sp = (1.0 - z * (1.0 / 6.0))
+        + z2 * (1.0 / 120.0 - z * (1.0 / 5040.0))
+        + z4 * ((1.0 / 362_880.0 - z * (1.0 / 39_916_800.0))
+            + z2 * (1.0 / 6_227_020_800.0 - z * (1.0 / 1_307_674_368_000.0)));
+    let s = r * sp;
+    let c = (1.0 - z * 0.5)
+        + z2 * (1.0 / 24.0 - z * (1.0 / 720.0))
+        + z4 * ((1.0 / 40_320.0 - z * (1.0 / 3_628_800.0))
+            + z2 * (1.0 / 479_001_600.0 - z * (1.0 / 87_178_291_200.0)));
     // Quadrant k mod 4 gives (s, c), (c, −s), (−s, −c), (−c, s): a swap for odd k and sign
     // bits, selected without branches (the quadrant of a random ray is unpredictable).
     let pair = [s, c];
@@ -109,11 +108,22 @@ impl HeightField {
     /// Distance along the unit direction `u` from `p` to the first crossing of the surface within
     /// `t_max`, for a point on side `side` (−1: above, z < J; +1: below, z > J).
     pub fn hit(&self, p: [f64; 3], u: [f64; 3], t_max: f64, side: f64) -> Option<f64> {
-        self.hit_counted(p, u, t_max, side, &mut 0)
+        self.hit_counted(p, u, t_max, side, 0.0, &mut 0)
+    }
+
+    /// The slope g′ = side·(u·n)/n_z at which a ray leaves the surface at a point whose unit
+    /// normal is `n` ([`HeightField::normal`]): what [`HeightField::hit_counted`] takes as
+    /// `leaving_slope` for a packet that has just crossed or been reflected there.
+    #[inline(always)]
+    pub fn leaving_slope(n: [f64; 3], u: [f64; 3], side: f64) -> f64 {
+        side * (u[0] * n[0] + u[1] * n[1] + u[2] * n[2]) / n[2]
     }
 
     /// [`HeightField::hit`], adding to `evals` how many times it evaluated the surface (the
     /// work of the search, deterministic: the photon allocation's cost model counts it).
+    /// `leaving_slope` > 0 says that `p` lies on the surface (a step of 1 nm off it at most)
+    /// and that g′ there is that value ([`HeightField::leaving_slope`]): the search then starts
+    /// from g = 0 with that slope instead of evaluating the surface at `p`; 0 means unknown.
     #[inline]
     pub fn hit_counted(
         &self,
@@ -121,6 +131,7 @@ impl HeightField {
         u: [f64; 3],
         t_max: f64,
         side: f64,
+        leaving_slope: f64,
         evals: &mut u64,
     ) -> Option<f64> {
         // Quick reject: the segment never enters the slab |z − z̄| ≤ A.
@@ -131,75 +142,77 @@ impl HeightField {
         }
         // g(t) = side·(z(t) − J(x(t), y(t))) ≥ 0 on the photon's side, with its derivative.
         let (wxu, wyu) = (self.wx * u[0], self.wy * u[1]);
+        let (ax, ay) = (self.wx * p[0] + self.px, self.wy * p[1] + self.py);
+        let (g0, su, sa) = (side * (p[2] - self.z_mean_mm), side * u[2], side * self.a);
         let n = std::cell::Cell::new(0u64);
         let g = |t: f64| {
             n.set(n.get() + 1);
-            side * (p[2] + u[2] * t - self.z(p[0] + u[0] * t, p[1] + u[1] * t))
+            g0 + su * t - sa * sin_cos(ax + wxu * t).0 * sin_cos(ay + wyu * t).0
         };
         let g_and_slope = |t: f64| {
             n.set(n.get() + 1);
-            let (sx, cx) = sin_cos(self.wx * (p[0] + u[0] * t) + self.px);
-            let (sy, cy) = sin_cos(self.wy * (p[1] + u[1] * t) + self.py);
-            let j = self.z_mean_mm + self.a * sx * sy;
-            let dj = self.a * (wxu * cx * sy + wyu * sx * cy);
-            (side * (p[2] + u[2] * t - j), side * (u[2] - dj))
+            let (sx, cx) = sin_cos(ax + wxu * t);
+            let (sy, cy) = sin_cos(ay + wyu * t);
+            (
+                g0 + su * t - sa * sx * sy,
+                su - sa * (wxu * cx * sy + wyu * sx * cy),
+            )
         };
-        // Along the ray, with a = ωx·ux and c = ωy·uy, sin(a·t + ·)·sin(c·t + ·) is half the
-        // difference of two cosines of frequencies a − c and a + c, so
-        // |J″| ≤ A/2·((a − c)² + (a + c)²) = A·(a² + c²).
-        let curv = self.a * (wxu * wxu + wyu * wyu);
-        // Start marching where the segment enters the slab, if it starts outside it and moves
-        // towards it; from inside the slab, march from the start.
-        let (top, bottom) = (self.z_mean_mm - self.a, self.z_mean_mm + self.a);
-        let mut t = if p[2] < top && u[2] > 0.0 {
-            (top - p[2]) / u[2]
-        } else if p[2] > bottom && u[2] < 0.0 {
-            (bottom - p[2]) / u[2]
-        } else {
-            0.0
-        };
-        // And stop where it leaves the slab on the far side: beyond it no crossing is possible.
-        let t_max = if u[2] != 0.0 {
-            let leave = if u[2] > 0.0 { bottom } else { top };
-            t_max.min(((leave - p[2]) / u[2]).max(0.0) + MIN_STEP_MM)
-        } else {
-            // Horizontal ray inside the slab: the surface's period bounds the search.
-            t_max.min(4.0 * std::f64::consts::PI / self.wx.min(self.wy).max(1e-9) + 1.0)
-        };
-        if t > t_max {
-            return None;
-        }
-        let mut newton_steps = 0;
+        // Along the ray, with a = ωx·ux and c = ωy·uy, A·sin(a·t + α)·sin(c·t + γ) is
+        // A/2·(cos((a − c)·t + α − γ) − cos((a + c)·t + α + γ)), so
+        // |J″| ≤ A/2·((a − c)² + (a + c)²) = A·(a² + c²): the bound of the whole surface.
+        let whole = Bounds::new(self.a * (wxu * wxu + wyu * wyu));
+        // Each cosine alone: the other one bounded by its range ±A/2 gives the envelope bounds
+        // g ≥ side·z − side·A/2·cos(slow) − A/2 (and the same with the fast one), whose
+        // curvature is only that of the term kept. Far from the ripples of one frequency they
+        // allow much longer steps.
+        let (w_minus, w_plus) = (wxu - wyu, wxu + wyu);
+        let half_a = 0.5 * self.a;
+        let minus = Bounds::new(half_a * w_minus * w_minus);
+        let plus = Bounds::new(half_a * w_plus * w_plus);
+        let (mut t, t_max) = self.slab_span(p, u, t_max)?;
+        // Leaving the surface: g(0) ≥ 0 and g′(0) is known; the slope, taken at the crossing,
+        // may differ at p (≤ 1 nm away) by up to curv·1 nm, which the margin covers. Slopes
+        // this small (grazing) are evaluated instead.
+        let mut known = (leaving_slope > 1e-6 && t == 0.0)
+            .then_some(leaving_slope - 2e-9 * whole.curv)
+            .filter(|s| *s > 0.0);
         let found = loop {
-            // g(t + Δ) ≥ g + g′Δ − curv·Δ²/2: its first positive root is a step that cannot pass
-            // the first crossing. Large when moving away, Newton-like when approaching.
-            let (gt, slope) = g_and_slope(t);
-            let gt = gt.max(0.0);
-            let safe = if curv > 1e-300 {
-                (slope + (slope * slope + 2.0 * curv * gt).sqrt()) / curv
-            } else if slope < 0.0 {
-                gt / -slope
+            let (gt, slope, safe) = if let Some(s) = known.take() {
+                (0.0, s, whole.ahead_min(0.0, s))
             } else {
-                f64::INFINITY
+                n.set(n.get() + 1);
+                let (sx, cx) = sin_cos(ax + wxu * t);
+                let (sy, cy) = sin_cos(ay + wyu * t);
+                let lin = g0 + su * t;
+                let gt = (lin - sa * sx * sy).max(0.0);
+                let slope = su - sa * (wxu * cx * sy + wyu * sx * cy);
+                // No crossing closer than the farthest of the three lower bounds' first roots.
+                let mut safe = whole.ahead_min(gt, slope);
+                let (c_minus, c_plus) = (cx * cy + sx * sy, cx * cy - sx * sy);
+                let slow = lin - side * half_a * c_minus - half_a;
+                if slow > 0.0 {
+                    let d_minus = (cx * sy - sx * cy) * w_minus;
+                    safe = safe.max(minus.ahead_min(slow, su - side * half_a * d_minus));
+                }
+                let fast = lin + side * half_a * c_plus - half_a;
+                if fast > 0.0 {
+                    let d_plus = -(sx * cy + cx * sy) * w_plus;
+                    safe = safe.max(plus.ahead_min(fast, su + side * half_a * d_plus));
+                }
+                (gt, slope, safe)
             };
             if t + safe >= t_max {
-                // The bound keeps g ≥ 0 up to t_max: no crossing (no need to look at the end).
+                // The bounds keep g ≥ 0 up to t_max: no crossing (no need to look at the end).
                 break None;
             }
-            // Approaching steeply (g′² > 2·curv·g): g(t + Δ) ≤ g + g′Δ + curv·Δ²/2 also has a
-            // root, so the crossing lies in [t + safe, t + upper]. The steps above are then a
-            // safeguarded Newton iteration from the photon's side, converging quadratically:
-            // stop once the bracket is below the tolerance.
-            let disc = slope * slope - 2.0 * curv * gt;
-            if slope < 0.0 && disc >= 0.0 && newton_steps < MAX_NEWTON_STEPS {
-                let upper = 2.0 * gt / (disc.sqrt() - slope);
+            // Approaching steeply (g′² > 2·curv·g): the upper bound g + g′Δ + curv·Δ²/2 has a
+            // root too, so the crossing lies in [t + safe, t + upper], where g still falls
+            // (g′ + curv·Δ < 0 for Δ ≤ upper ≤ −g′/curv): the root there is unique, and the
+            // first. Newton's method finds it.
+            if let Some(upper) = whole.ahead_max(gt, slope) {
                 if t + upper <= t_max {
-                    if upper <= ROOT_TOL_MM {
-                        break Some(t);
-                    }
-                    t += safe;
-                    newton_steps += 1;
-                    continue;
+                    break Some(polish(&g_and_slope, &whole, t, (gt, slope), (safe, upper)));
                 }
             }
             let t_next = t + safe.max(MIN_STEP_MM);
@@ -222,6 +235,112 @@ impl HeightField {
         *evals += n.get();
         found
     }
+    /// The part of the segment [0, t_max] from `p` along `u` where a crossing is possible:
+    /// from where it enters the slab |z − z̄| ≤ A (the start, if inside) to just past where it
+    /// leaves it on the far side; `None` if that part is empty.
+    #[inline(always)]
+    fn slab_span(&self, p: [f64; 3], u: [f64; 3], t_max: f64) -> Option<(f64, f64)> {
+        // Start marching where the segment enters the slab, if it starts outside it and moves
+        // towards it; from inside the slab, march from the start.
+        let (top, bottom) = (self.z_mean_mm - self.a, self.z_mean_mm + self.a);
+        let t = if p[2] < top && u[2] > 0.0 {
+            (top - p[2]) / u[2]
+        } else if p[2] > bottom && u[2] < 0.0 {
+            (bottom - p[2]) / u[2]
+        } else {
+            0.0
+        };
+        // And stop where it leaves the slab on the far side: beyond it no crossing is possible.
+        let t_max = if u[2] != 0.0 {
+            let leave = if u[2] > 0.0 { bottom } else { top };
+            t_max.min(((leave - p[2]) / u[2]).max(0.0) + MIN_STEP_MM)
+        } else {
+            // Horizontal ray inside the slab: the surface's period bounds the search.
+            t_max.min(4.0 * std::f64::consts::PI / self.wx.min(self.wy).max(1e-9) + 1.0)
+        };
+        (t <= t_max).then_some((t, t_max))
+    }
+}
+
+/// The quadratic bounds g + g′Δ ∓ curv·Δ²/2 on the signed distance along a ray.
+struct Bounds {
+    curv: f64,
+}
+
+impl Bounds {
+    fn new(curv: f64) -> Self {
+        Bounds { curv }
+    }
+
+    /// The first positive root of the lower bound: no crossing lies closer than this ahead of a
+    /// point with g ≥ 0 and slope g′. Written 2g/(√(g′² + 2·curv·g) − g′) to stay exact as
+    /// curv → 0 when approaching, (g′ + √…)/curv when moving away (infinite for a flat
+    /// surface): each form free of cancellation where it is used.
+    #[inline(always)]
+    fn ahead_min(&self, g: f64, slope: f64) -> f64 {
+        let root = (slope * slope + 2.0 * self.curv * g).sqrt();
+        if slope < 0.0 {
+            2.0 * g / (root - slope)
+        } else if self.curv > 1e-300 {
+            (slope + root) / self.curv
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The first root of the upper bound g + g′Δ + curv·Δ²/2, where one exists (g′ < 0,
+    /// g′² ≥ 2·curv·g): a crossing lies no farther than this.
+    #[inline(always)]
+    fn ahead_max(&self, g: f64, slope: f64) -> Option<f64> {
+        let disc = slope * slope - 2.0 * self.curv * g;
+        (slope < 0.0 && disc >= 0.0).then(|| 2.0 * g / (disc.sqrt() - slope))
+    }
+}
+
+/// The unique crossing in [t + safe, t + upper] of a g that decreases there, by Newton's
+/// method kept inside a bracket that the quadratic bounds at every evaluated point shrink.
+/// Returns the bracket's photon-side end once it is narrower than the tolerance.
+#[inline(always)]
+fn polish(
+    g_and_slope: &impl Fn(f64) -> (f64, f64),
+    b: &Bounds,
+    t: f64,
+    (gt, slope): (f64, f64),
+    (safe, upper): (f64, f64),
+) -> f64 {
+    let (mut lo, mut hi) = (t + safe, t + upper);
+    let mut x = t + gt / -slope;
+    for _ in 0..MAX_NEWTON_STEPS {
+        if hi - lo <= ROOT_TOL_MM {
+            break;
+        }
+        if !(x > lo && x < hi) {
+            x = 0.5 * (lo + hi);
+        }
+        let (gx, sx) = g_and_slope(x);
+        if gx >= 0.0 {
+            // The crossing is ahead of x: between the roots of the two bounds from x.
+            lo = lo.max(x + b.ahead_min(gx, sx));
+            if let Some(up) = b.ahead_max(gx, sx) {
+                hi = hi.min(x + up);
+            }
+        } else {
+            // Behind x: mirror the bounds (G = −g > 0, S = −g′ > 0 going back).
+            let (gn, sn) = (-gx, -sx);
+            let back_min = 2.0 * gn / (sn + (sn * sn + 2.0 * b.curv * gn).sqrt());
+            hi = hi.min(x - back_min);
+            let disc = sn * sn - 2.0 * b.curv * gn;
+            if disc >= 0.0 && sn > 0.0 {
+                lo = lo.max(x - 2.0 * gn / (sn + disc.sqrt()));
+            }
+        }
+        x = if sx < 0.0 {
+            x + gx / -sx
+        } else {
+            0.5 * (lo + hi)
+        };
+    }
+    lo
 }
 
 /// The crossing of `g` in [lo, hi] (g(lo) ≥ 0 > g(hi), each given with its value) by the
@@ -317,6 +436,91 @@ mod tests {
         }
         let q = [p[0] + u[0] * t, p[1] + u[1] * t, p[2] + u[2] * t];
         assert!((q[2] - f.z(q[0], q[1])).abs() < 1e-9);
+    }
+
+    /// Rays from random points in and around the slab, random directions and lengths: the
+    /// search agrees with a dense scan (no crossing before the one it returns, none at all when
+    /// it returns none, apart from dips shorter than the scan's step) and lands on the surface.
+    #[test]
+    fn random_rays_find_the_first_crossing_of_a_dense_scan() {
+        use rand_core::Rng;
+        let f = field();
+        let mut rng = crate::math::rng::batch_rng(11, 0);
+        let mut u01 = || crate::math::rng::uniform(rng.next_u64());
+        let (mut found, mut none) = (0, 0);
+        for _ in 0..3000 {
+            let p = [u01() * 0.1, u01() * 0.1, 0.03 + 0.14 * u01()];
+            let side = if p[2] < f.z(p[0], p[1]) { -1.0 } else { 1.0 };
+            let cz = 2.0 * u01() - 1.0;
+            let ph = 2.0 * std::f64::consts::PI * u01();
+            let st = (1.0 - cz * cz).sqrt();
+            let u = [st * ph.cos(), st * ph.sin(), cz];
+            let t_max = 0.3 * u01();
+            let g = |t: f64| side * (p[2] + u[2] * t - f.z(p[0] + u[0] * t, p[1] + u[1] * t));
+            let scan = |to: f64| {
+                let n = 20_000;
+                (1..=n)
+                    .map(|k| to * k as f64 / n as f64)
+                    .find(|&t| g(t) < 0.0)
+            };
+            match f.hit(p, u, t_max, side) {
+                Some(t) => {
+                    found += 1;
+                    assert!(t <= t_max && g(t) >= -1e-12, "t {t} g {}", g(t));
+                    assert!(g(t + 1e-8) < 0.0 || g(t).abs() < 1e-9, "not at the surface");
+                    if let Some(ts) = scan(t) {
+                        assert!(ts >= t - 1e-9, "crossing at {ts} before {t}");
+                    }
+                }
+                None => {
+                    none += 1;
+                    assert_eq!(scan(t_max), None, "missed a crossing");
+                }
+            }
+        }
+        assert!(found > 300 && none > 300, "{found} {none}");
+    }
+
+    /// Leaving the surface with the slope given: the same crossing as a search that evaluates
+    /// its start, after a transmission at a random point.
+    #[test]
+    fn a_known_leaving_slope_finds_the_same_crossing() {
+        use rand_core::Rng;
+        let f = field();
+        let mut rng = crate::math::rng::batch_rng(12, 0);
+        let mut u01 = || crate::math::rng::uniform(rng.next_u64());
+        let mut compared = 0;
+        for _ in 0..3000 {
+            let (x, y) = (u01() * 0.1, u01() * 0.1);
+            let n = f.normal(x, y);
+            let cz = 2.0 * u01() - 1.0;
+            let ph = 2.0 * std::f64::consts::PI * u01();
+            let st = (1.0 - cz * cz).sqrt();
+            let u = [st * ph.cos(), st * ph.sin(), cz];
+            // Leaving to the side the direction points to.
+            let side = if u[0] * n[0] + u[1] * n[1] + u[2] * n[2] > 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            let z = f.z(x, y);
+            let p = [x + u[0] * 1e-9, y + u[1] * 1e-9, z + u[2] * 1e-9];
+            let slope = HeightField::leaving_slope(n, u, side);
+            assert!(slope >= 0.0);
+            let t_max = 0.3 * u01();
+            let plain = f.hit_counted(p, u, t_max, side, 0.0, &mut 0);
+            let (mut e_hint, mut e_plain) = (0, 0);
+            let hinted = f.hit_counted(p, u, t_max, side, slope, &mut e_hint);
+            f.hit_counted(p, u, t_max, side, 0.0, &mut e_plain);
+            match (plain, hinted) {
+                (Some(a), Some(b)) => assert!((a - b).abs() < 1e-9, "{a} {b}"),
+                (None, None) => {}
+                other => panic!("{other:?}"),
+            }
+            assert!(e_hint <= e_plain);
+            compared += 1;
+        }
+        assert_eq!(compared, 3000);
     }
 
     #[test]
