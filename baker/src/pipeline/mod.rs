@@ -27,7 +27,8 @@ pub use events::{Bar, Events, Observer};
 
 /// Bumped whenever a change to the transport or the bake's unit definitions would change a
 /// unit's result for the same inputs: old cache entries then stop matching.
-/// 2: the junction search (envelope bounds, bracketed Newton) moves crossings by < 1e-10 mm.
+/// 2: the junction search (envelope bounds, bracketed Newton) moves crossings by < 1e-10 mm,
+/// and disk rejection takes one 64-bit draw per try (profile/DECISIONS.md row 13).
 pub const ENGINE_VERSION: u32 = 2;
 
 /// A unit's content address.

@@ -189,11 +189,7 @@ impl Prepared {
         let best = (d, if up { Hit::Top } else { Hit::Bottom });
         if let Some((ju, hf)) = &self.junction {
             // The planar interface at z̄ between layers ju and ju+1 is replaced by J(x, y).
-            let side = if layer == *ju {
-                -1.0
-            } else if layer == ju + 1 {
-                1.0
-            } else {
+            let Some(side) = junction_side(*ju, layer) else {
                 return best;
             };
             let planar_is_junction =
@@ -210,6 +206,19 @@ impl Prepared {
             }
         }
         best
+    }
+}
+
+/// The side of the junction below layer `ju` that `layer` lies on, in the sign convention of
+/// [`HeightField::hit`] (−1 above, in layer `ju`; +1 below, in `ju + 1`); `None` for other layers.
+#[inline(always)]
+fn junction_side(ju: usize, layer: usize) -> Option<f64> {
+    if layer == ju {
+        Some(-1.0)
+    } else if layer == ju + 1 {
+        Some(1.0)
+    } else {
+        None
     }
 }
 
@@ -421,7 +430,8 @@ impl Packet {
             *u = [t[0] * inv, t[1] * inv, t[2] * inv];
             self.layer = other;
         }
-        let side = if self.layer == *ju { -1.0 } else { 1.0 };
+        // The packet is in layer ju or ju + 1 here, on one side or the other.
+        let side = junction_side(*ju, self.layer).unwrap_or(1.0);
         self.leaving_slope = HeightField::leaving_slope(nv, *u, side);
         // Step off the surface so the next search starts on the right side.
         for k in 0..3 {

@@ -181,6 +181,7 @@ impl HeightField {
             let (gt, slope, safe) = if let Some(s) = known.take() {
                 (0.0, s, whole.ahead_min(0.0, s))
             } else {
+                // g_and_slope's formulas, inlined: the envelopes need its sines and cosines.
                 n.set(n.get() + 1);
                 let (sx, cx) = sin_cos(ax + wxu * t);
                 let (sy, cy) = sin_cos(ay + wyu * t);
@@ -325,13 +326,11 @@ fn polish(
                 hi = hi.min(x + up);
             }
         } else {
-            // Behind x: mirror the bounds (G = −g > 0, S = −g′ > 0 going back).
-            let (gn, sn) = (-gx, -sx);
-            let back_min = 2.0 * gn / (sn + (sn * sn + 2.0 * b.curv * gn).sqrt());
-            hi = hi.min(x - back_min);
-            let disc = sn * sn - 2.0 * b.curv * gn;
-            if disc >= 0.0 && sn > 0.0 {
-                lo = lo.max(x - 2.0 * gn / (sn + disc.sqrt()));
+            // Behind x: the same bounds looking back, for h(τ) = −g(x − τ) (h = −g > 0 and
+            // h′ = g′ at τ = 0).
+            hi = hi.min(x - b.ahead_min(-gx, sx));
+            if let Some(back) = b.ahead_max(-gx, sx) {
+                lo = lo.max(x - back);
             }
         }
         x = if sx < 0.0 {
