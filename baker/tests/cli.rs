@@ -115,10 +115,11 @@ fn optics_json_is_a_valid_document_with_named_layers() {
 fn optics_single_entry_csv_plot_and_mci() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path().to_str().unwrap();
+    let out = format!("{d}/optics");
     let (csv, plots, mci) = (
-        format!("{d}/csv"),
-        format!("{d}/plots"),
-        format!("{d}/run.mci"),
+        out.clone(),
+        out.clone(),
+        format!("{out}/fig35_female_type2_age30_550nm.mci"),
     );
     let o = baker(&[
         "optics",
@@ -126,13 +127,11 @@ fn optics_single_entry_csv_plot_and_mci() {
         "--entry",
         "fig35_female_type2_age30",
         "--csv",
-        &csv,
-        "--plot",
-        &plots,
+        "--plots",
         "--mci",
         "550",
-        "--mci-out",
-        &mci,
+        "-o",
+        &out,
         "--photons",
         "20000",
     ]);

@@ -180,10 +180,10 @@ fn every_writing_command_leaves_devices_and_fifos_what_they_were() {
                 "light30",
                 "--mci",
                 "450",
-                "--mci-out",
+                "-o",
                 "@",
             ],
-            true,
+            false,
         ),
         (
             vec!["mc", "stack.json", "--photons", "2000", "--mco", "@"],
@@ -204,8 +204,8 @@ fn every_writing_command_leaves_devices_and_fifos_what_they_were() {
             ],
             true,
         ),
-        (vec!["optics", "skin.yaml", "--csv", "@"], false),
-        (vec!["optics", "skin.yaml", "--plot", "@"], false),
+        (vec!["optics", "skin.yaml", "--csv", "-o", "@"], false),
+        (vec!["optics", "skin.yaml", "--plots", "-o", "@"], false),
         (vec!["bake", "skin.yaml", "--out", "@", "-q"], false),
         (vec!["bake", "fib.yaml", "--out", "@", "-q"], false),
         (

@@ -19,6 +19,14 @@ pub struct Collected {
 
 /// Deletes the units of the cache at `cache_dir` that nothing under `out` needs.
 pub fn collect(cache_dir: &Path, out: &Path, dry_run: bool) -> anyhow::Result<Collected> {
+    if !cache_dir.is_dir() {
+        return Err(crate::error::UsageError(format!(
+            "{}: no unit cache there (a bake into {} makes one; --cache DIR names another)",
+            cache_dir.display(),
+            out.display()
+        ))
+        .into());
+    }
     let c = crate::pipeline::Cache::new(cache_dir, crate::pipeline::CacheMode::Use);
     let live = live_units(cache_dir, out)?;
     let (mut units, mut bytes) = (0usize, 0u64);

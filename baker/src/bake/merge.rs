@@ -25,14 +25,14 @@ pub fn merge(
     for d in shards {
         let p = d.join("shard.json");
         let text = crate::files::read_text(&p, crate::files::MAX_SPEC_BYTES, "a shard manifest")
-            .with_context(|| {
-                format!(
-                    "{}: not a shard directory (no readable shard.json)",
+            .map_err(|e| {
+                UsageError(format!(
+                    "{}: not a shard directory (no readable shard.json: {e:#})",
                     d.display()
-                )
+                ))
             })?;
         let s: ShardManifest = serde_json::from_str(&text)
-            .with_context(|| format!("{}: invalid shard manifest", p.display()))?;
+            .map_err(|e| UsageError(format!("{}: invalid shard manifest: {e}", p.display())))?;
         let (i, n): (usize, usize) = s
             .shard
             .split_once('/')

@@ -55,6 +55,7 @@ pub fn run(req: &Request, events: Events) -> anyhow::Result<()> {
         .map(|p| load_checked(p, &overrides).map(|(s, _)| s))
         .collect::<anyhow::Result<Vec<_>>>()?;
     check_entries(req, &specs)?;
+    check_kind_flags(req, &specs, &events)?;
     let root = OutRoot::open(&req.out).map_err(|e| UsageError(e.to_string()))?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(req.thread_count())
@@ -77,8 +78,43 @@ pub fn run(req: &Request, events: Events) -> anyhow::Result<()> {
     shard::finish(req, &runner, &stems, t0, result)
 }
 
+/// Skin-only flags on fiber specs: an error when no spec of the bake is a skin spec, a notice
+/// when some are (the flag applies to those only).
+fn check_kind_flags(req: &Request, specs: &[Spec], events: &Events) -> anyhow::Result<()> {
+    let skin_only = [
+        ("--optics-only", req.optics_only),
+        ("--no-reuse", req.no_reuse),
+        ("--plots", req.plots),
+    ];
+    let fibers: Vec<String> = req
+        .specs
+        .iter()
+        .zip(specs)
+        .filter(|(_, s)| matches!(s, Spec::Fiber(_)))
+        .map(|(p, _)| Shown(p).to_string())
+        .collect();
+    for (flag, set) in skin_only {
+        if !set || fibers.is_empty() {
+            continue;
+        }
+        if fibers.len() == specs.len() {
+            return Err(UsageError(format!(
+                "{flag} applies to skin specs only; {} {} a fiber spec",
+                fibers.join(", "),
+                if fibers.len() == 1 { "is" } else { "are" }
+            ))
+            .into());
+        }
+        events.notice(format!(
+            "{flag} applies to skin specs only; it is ignored for {}",
+            fibers.join(", ")
+        ));
+    }
+    Ok(())
+}
+
 /// With several specs an entry may live in any of them; each name asked for must exist.
-fn check_entries(req: &Request, specs: &[Spec]) -> anyhow::Result<()> {
+pub fn check_entries(req: &Request, specs: &[Spec]) -> anyhow::Result<()> {
     let names: Vec<&str> = specs
         .iter()
         .flat_map(|s| s.entries().into_iter().map(|(n, _)| n))

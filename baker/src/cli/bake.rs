@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::observer::{ProgressMode, Terminal};
+use super::observer::ProgressArgs;
 use crate::bake::Request;
 use crate::pipeline::Shard;
 
@@ -14,7 +14,7 @@ pub struct BakeArgs {
     #[arg(required = true)]
     pub specs: Vec<PathBuf>,
     /// Output root; each spec bakes into OUT/<spec name>/.
-    #[arg(long, default_value = "out")]
+    #[arg(short = 'o', long, default_value = "out")]
     pub out: PathBuf,
     /// Bake only this entry (repeatable), e.g. for a preview.
     #[arg(long = "entry", value_name = "NAME")]
@@ -26,23 +26,18 @@ pub struct BakeArgs {
     /// Worker threads (default: all cores). Results do not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
-    /// No progress bar and no summary (errors still go to stderr).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Skip the Monte Carlo profiles: layer optics only.
+    #[command(flatten)]
+    pub progress: ProgressArgs,
+    /// Skin: skip the Monte Carlo profiles, layer optics only.
     #[arg(long)]
     pub optics_only: bool,
-    /// One simulation per entry instead of one per group of entries sharing scattering (to
+    /// Skin: one simulation per entry instead of one per group of entries sharing scattering (to
     /// measure what absorption reuse saves; results differ only by Monte Carlo noise).
     #[arg(long)]
     pub no_reuse: bool,
-    /// Also write PNG plots of every entry's coefficients.
+    /// Skin: also write PNG plots of every entry's coefficients.
     #[arg(long)]
     pub plots: bool,
-    /// Progress: `auto` (a bar on a terminal, a line every ~5 % otherwise), `bar`, `json`
-    /// (one JSON event per line on stderr, for pipeline tools), `none`.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub progress: ProgressMode,
     /// Bake only the work units of shard I of N (1 ≤ I ≤ N) into OUT (their cache and
     /// `shard.json`); `baker merge` assembles the tables from all shards.
     #[arg(long, value_name = "I/N")]
@@ -83,5 +78,5 @@ impl BakeArgs {
 }
 
 pub fn run(a: BakeArgs) -> anyhow::Result<()> {
-    crate::bake::run(&a.request(), Terminal::events(a.progress, a.quiet))
+    crate::bake::run(&a.request(), a.progress.events())
 }

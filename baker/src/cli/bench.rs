@@ -18,6 +18,11 @@ pub struct BenchArgs {
     /// Repetitions per measurement (the best is reported).
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+    /// Write the table (Markdown) to FILE, atomically, instead of standard output.
+    #[arg(short = 'o', long = "out", value_name = "FILE")]
+    pub out: Option<std::path::PathBuf>,
+    #[command(flatten)]
+    pub progress: super::observer::ProgressArgs,
 }
 
 /// The 5-layer stack of a 30-year-old type II woman's face at 550 nm.
@@ -36,29 +41,48 @@ pub fn reference_stack() -> anyhow::Result<Stack> {
 }
 
 pub fn run(a: BenchArgs) -> anyhow::Result<()> {
+    use std::fmt::Write as _;
     let wavy = reference_stack()?;
     let flat = Stack {
         junction: None,
         ..wavy.clone()
     };
-    outln!("| stack | threads | photons | best s | photons/s | scattering events/s | ns/event/thread |")?;
-    outln!("|---|---|---|---|---|---|---|")?;
-    for (name, s) in [
+    let cases = [
         ("planar junction", &flat),
         ("Eq. 1 junction (A = 50 µm)", &wavy),
-    ] {
+    ];
+    let total = cases.len() * a.threads.len() * a.repeat.max(1);
+    let bar = a
+        .progress
+        .bar()
+        .then(|| super::progress::bar(total as u64, "measurements"));
+    let events = a.progress.events();
+    let mut table = String::new();
+    writeln!(table, "| stack | threads | photons | best s | photons/s | scattering events/s | ns/event/thread |")?;
+    writeln!(table, "|---|---|---|---|---|---|---|")?;
+    let mut done = 0;
+    for (name, s) in cases {
         for &t in &a.threads {
             let mut best: Option<transport::McResult> = None;
             for rep in 0..a.repeat.max(1) {
                 let mut o = McOptions::new(a.photons, 1 + rep as u64);
                 o.threads = Some(t);
                 let r = transport::run(s, &o)?;
+                done += 1;
+                events.emit(
+                    serde_json::json!({"event": "measured", "stack": name, "threads": t,
+                    "index": done - 1, "total": total, "photons_per_s": r.photons_per_s}),
+                );
+                if let Some(b) = &bar {
+                    b.set_position(done as u64);
+                }
                 if best.as_ref().is_none_or(|b| r.seconds < b.seconds) {
                     best = Some(r);
                 }
             }
             let r = best.unwrap();
-            outln!(
+            writeln!(
+                table,
                 "| {name} | {t} | {} | {:.3} | {:.0} | {:.3e} | {:.1} |",
                 r.photons,
                 r.seconds,
@@ -68,5 +92,8 @@ pub fn run(a: BenchArgs) -> anyhow::Result<()> {
             )?;
         }
     }
-    Ok(())
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    super::emit_table(&table, a.out.as_deref(), &a.progress)
 }

@@ -22,9 +22,12 @@ pub struct ExportArgs {
     /// the first).
     #[arg(long)]
     pub entry: Option<String>,
-    /// Output file (default: stdout).
-    #[arg(short = 'o', long = "output")]
+    /// Output file, written atomically (default, or `-`: standard output).
+    #[arg(short = 'o', long = "out", alias = "output", value_name = "FILE")]
     pub output: Option<PathBuf>,
+    /// No summary or "wrote" line on stderr (errors still go there).
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 pub fn run(a: ExportArgs) -> anyhow::Result<()> {
@@ -45,7 +48,7 @@ pub fn run(a: ExportArgs) -> anyhow::Result<()> {
         ))
         .into());
     };
-    emit(&export, a.output.as_deref())
+    emit(&export, a.output.as_deref(), a.quiet)
 }
 
 /// The first 8 bytes of `table` (the file magic), zero-filled if it is shorter.
@@ -63,6 +66,9 @@ fn read_head(table: &Path) -> anyhow::Result<[u8; 8]> {
             ))
             .into())
         }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(UsageError(format!("{}: no such file", table.display())).into());
+        }
         Err(e) => {
             return Err(UsageError(format!("{}: {e}", table.display())).into());
         }
@@ -75,15 +81,15 @@ fn read_head(table: &Path) -> anyhow::Result<[u8; 8]> {
 
 /// Prints the export's summary to stderr, then writes its document to `output` (atomically)
 /// or stdout, then confirms a file write where the export says what it wrote.
-fn emit(export: &Export, output: Option<&Path>) -> anyhow::Result<()> {
-    if let Some(line) = &export.summary {
+fn emit(export: &Export, output: Option<&Path>, quiet: bool) -> anyhow::Result<()> {
+    if let Some(line) = export.summary.as_ref().filter(|_| !quiet) {
         eprintln!("{line}");
     }
     match output {
         Some(path) => {
             crate::output::atomic::write(path, export.text.as_bytes())
                 .with_context(|| format!("writing {}", path.display()))?;
-            if let Some(what) = &export.written {
+            if let Some(what) = export.written.as_ref().filter(|_| !quiet) {
                 eprintln!(
                     "baker export: {what} → {} ({})",
                     path.display(),
@@ -116,6 +122,7 @@ mod tests {
                 to: to.into(),
                 entry: entry.map(str::to_string),
                 output: Some(out.clone()),
+                quiet: true,
             })
             .unwrap_err();
             assert!(!out.exists(), "{to}: {e:#}");

@@ -23,9 +23,12 @@ pub enum FiberCommand {
 
 #[derive(Debug, Args)]
 pub struct FiberBenchArgs {
-    /// Fiber spec whose entries are measured.
+    /// Fiber specs whose entries are measured.
     #[arg(default_value = "specs/fibers.yaml")]
-    pub spec: PathBuf,
+    pub specs: Vec<PathBuf>,
+    /// Measure only this entry (repeatable; default: every entry).
+    #[arg(long = "entry", value_name = "NAME")]
+    pub entries: Vec<String>,
     /// Photons per measurement.
     #[arg(long, default_value_t = 4_000_000)]
     pub photons: u64,
@@ -38,16 +41,21 @@ pub struct FiberBenchArgs {
     /// Incident θi, degrees.
     #[arg(long, allow_hyphen_values = true, default_value_t = -45.0)]
     pub theta_i: f64,
+    /// Write the table to FILE, atomically, instead of standard output.
+    #[arg(short = 'o', long = "out", value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub progress: super::observer::ProgressArgs,
 }
 
 #[derive(Debug, Args)]
 pub struct TraceArgs {
-    /// Fiber spec (YAML with `fibers:`); use with --entry. Omit to describe the fiber with
+    /// Fiber specs (YAML with `fibers:`); use with --entry. Omit to describe the fiber with
     /// --section and the flags below.
-    pub spec: Option<PathBuf>,
-    /// Fiber entry of the spec.
-    #[arg(long, requires = "spec")]
-    pub entry: Option<String>,
+    pub specs: Vec<PathBuf>,
+    /// Fiber entry of the spec (repeatable: each is traced in turn).
+    #[arg(long = "entry", value_name = "NAME", requires = "specs")]
+    pub entries: Vec<String>,
     /// θi, degrees in [−90, 90]: ωi (towards the light) makes this angle with the plane
     /// normal to the fiber axis (+z).
     #[arg(long, allow_hyphen_values = true)]
@@ -67,18 +75,21 @@ pub struct TraceArgs {
     /// Bin size of θo and Δφ, degrees (must divide 180).
     #[arg(long, default_value_t = 2.0)]
     pub resolution_deg: f64,
-    /// Write the outgoing slice as a false-colour log PNG (like Table 8).
-    #[arg(long, value_name = "FILE")]
-    pub png: Option<PathBuf>,
-    /// Print one JSON object instead of a summary.
+    /// Write the outgoing slice as a false-colour log PNG (like Table 8) to FILE.png; with
+    /// several --entry, FILE is a folder and each entry gets `<entry>.png` in it.
+    #[arg(short = 'o', long = "out", alias = "png", value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub progress: super::observer::ProgressArgs,
+    /// Print one JSON object per traced fiber (one per line) instead of a summary.
     #[arg(long)]
     pub json: bool,
     /// Wavelength at which a spec entry's dye gives μa, nm.
-    #[arg(long, default_value_t = 550.0, requires = "spec")]
+    #[arg(long, default_value_t = 550.0, requires = "specs")]
     pub lambda_nm: f64,
     /// Cross-section: circle | ellipse:RATIO | polygon:FILE.csv | mask:FILE.png:UM_PER_PX |
     /// a generator (trilobal, silk, cotton_raw, cotton_mercerised, wool).
-    #[arg(long, conflicts_with = "spec")]
+    #[arg(long, conflicts_with = "specs")]
     pub section: Option<String>,
     /// Variant of a generated section (seeded variability).
     #[arg(long, default_value_t = 0)]
@@ -97,7 +108,7 @@ pub struct TraceArgs {
     #[arg(long)]
     pub mua_per_um: Option<f64>,
     /// Cuticle scale interval along the axis, µm (adds wool-like scales).
-    #[arg(long, conflicts_with = "spec")]
+    #[arg(long, conflicts_with = "specs")]
     pub cuticle_length_um: Option<f64>,
     /// Cuticle tilt, degrees (with --cuticle-length-um).
     #[arg(long, default_value_t = 3.0, requires = "cuticle_length_um")]
@@ -111,9 +122,8 @@ pub fn run(c: FiberCommand) -> anyhow::Result<()> {
     }
 }
 
-fn run_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
-    let s = crate::spec::load_fiber(&a.spec)
-        .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+/// The fibers `fiber bench` measures: a smooth circle, then the selected spec entries.
+fn bench_cases(a: &FiberBenchArgs) -> anyhow::Result<Vec<(String, Fiber, f64)>> {
     let smooth = Fiber {
         section: Section::circle(10.0),
         surface: Surface {
@@ -123,26 +133,54 @@ fn run_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
         cuticle: None,
     };
     let mut cases = vec![("smooth circle (10 µm, η 1.55)".to_string(), smooth, 0.0)];
-    for e in &s.fibers {
-        cases.push((e.name.clone(), e.fiber(), e.mua_per_um(550.0)));
+    let mut found = Vec::new();
+    for spec in &a.specs {
+        let s = crate::spec::load_fiber(spec)
+            .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+        for e in &s.fibers {
+            found.push(e.name.clone());
+            if a.entries.is_empty() || a.entries.contains(&e.name) {
+                cases.push((e.name.clone(), e.fiber(), e.mua_per_um(550.0)));
+            }
+        }
     }
-    outln!(
+    if let Some(missing) = a.entries.iter().find(|n| !found.contains(n)) {
+        return Err(usage(format!(
+            "no fiber entry {missing:?} in {}; entries: {}",
+            shown_list(&a.specs),
+            found.join(", ")
+        )));
+    }
+    Ok(cases)
+}
+
+fn run_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
+    use std::fmt::Write as _;
+    let cases = bench_cases(&a)?;
+    let total = cases.len() * a.threads.len();
+    let bar = a
+        .progress
+        .bar()
+        .then(|| super::progress::bar(total as u64, "measurements"));
+    let events = a.progress.events();
+    let mut s = String::new();
+    writeln!(
+        s,
         "fiber tracer throughput, θi = {}°, {} photons, best of {}",
-        a.theta_i,
-        a.photons,
-        a.repeat
+        a.theta_i, a.photons, a.repeat
     )?;
-    out!("{:<32} {:>10} {:>8}", "fiber", "edges", "holes")?;
+    write!(s, "{:<32} {:>10} {:>8}", "fiber", "edges", "holes")?;
     for t in &a.threads {
-        out!(" {:>14}", format!("{t} thr M/s"))?;
+        write!(s, " {:>14}", format!("{t} thr M/s"))?;
     }
-    outln!()?;
+    writeln!(s)?;
+    let mut done = 0;
     for (name, f, mua) in &cases {
         let edges = match &f.section {
             Section::Polygon(p) => p.edge_count().to_string(),
             Section::Conic { .. } => "conic".into(),
         };
-        out!("{name:<32} {edges:>10} {:>8}", f.section.hole_count())?;
+        write!(s, "{name:<32} {edges:>10} {:>8}", f.section.hole_count())?;
         for &t in &a.threads {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build()?;
             let o = TraceOptions {
@@ -158,11 +196,20 @@ fn run_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
                         .photons_per_s()
                 })
                 .fold(0.0, f64::max);
-            out!(" {:>14.3}", best / 1e6)?;
+            write!(s, " {:>14.3}", best / 1e6)?;
+            done += 1;
+            events.emit(json!({"event": "measured", "fiber": name, "threads": t,
+                "index": done - 1, "total": total, "photons_per_s": best}));
+            if let Some(b) = &bar {
+                b.set_position(done as u64);
+            }
         }
-        outln!()?;
+        writeln!(s)?;
     }
-    Ok(())
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    super::emit_table(&s, a.out.as_deref(), &a.progress)
 }
 
 fn usage(m: impl Into<String>) -> anyhow::Error {
@@ -274,21 +321,28 @@ fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
     Ok((fiber, a.mua_per_um.unwrap_or(0.0), s.to_string()))
 }
 
-/// The fiber to trace (a spec entry, or the flags), its μa per µm and its label.
-fn fiber_of(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
-    match &a.spec {
-        Some(spec) => {
-            let s = crate::spec::load_fiber(spec)
-                .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
-            let name = a
-                .entry
-                .as_deref()
-                .ok_or_else(|| usage("--entry NAME is required with a spec"))?;
-            let e = s.fibers.iter().find(|f| f.name == name).ok_or_else(|| {
+/// The fibers to trace (spec entries, or the flags), each with its μa per µm and label.
+fn fibers_of(a: &TraceArgs) -> anyhow::Result<Vec<(Fiber, f64, String)>> {
+    if a.specs.is_empty() {
+        return Ok(vec![fiber_from_flags(a)?]);
+    }
+    if a.entries.is_empty() {
+        return Err(usage("--entry NAME is required with a spec"));
+    }
+    let mut fibers = Vec::new();
+    for spec in &a.specs {
+        let s = crate::spec::load_fiber(spec)
+            .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+        fibers.extend(s.fibers);
+    }
+    a.entries
+        .iter()
+        .map(|name| {
+            let e = fibers.iter().find(|f| &f.name == name).ok_or_else(|| {
                 usage(format!(
-                    "{}: no fiber entry {name:?}; entries: {}",
-                    spec.display(),
-                    s.fibers
+                    "no fiber entry {name:?} in {}; entries: {}",
+                    shown_list(&a.specs),
+                    fibers
                         .iter()
                         .map(|f| f.name.as_str())
                         .collect::<Vec<_>>()
@@ -297,13 +351,20 @@ fn fiber_of(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
             })?;
             let mua = a.mua_per_um.unwrap_or_else(|| e.mua_per_um(a.lambda_nm));
             Ok((e.fiber(), mua, e.name.clone()))
-        }
-        None => fiber_from_flags(a),
-    }
+        })
+        .collect()
+}
+
+/// Spec paths as a comma-separated list for messages.
+fn shown_list(paths: &[PathBuf]) -> String {
+    (paths.iter())
+        .map(|p| crate::files::Shown(p).to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
-    let (fiber, mua, label) = fiber_of(&a)?;
+    let fibers = fibers_of(&a)?;
     if !(-90.0..=90.0).contains(&a.theta_i) {
         return Err(usage(format!(
             "--theta-i {} out of range [-90, 90]",
@@ -313,12 +374,48 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     if a.photons == 0 {
         return Err(usage("--photons must be at least 1"));
     }
-    if !(mua >= 0.0 && mua.is_finite()) {
-        return Err(usage(format!("--mua-per-um {mua} must be ≥ 0")));
+    for (_, mua, _) in &fibers {
+        if !(*mua >= 0.0 && mua.is_finite()) {
+            return Err(usage(format!("--mua-per-um {mua} must be ≥ 0")));
+        }
     }
     let grid = AngularGrid::new(a.resolution_deg).map_err(usage)?;
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = a.threads {
+        builder = builder.num_threads(t);
+    }
+    let pool = builder.build()?;
+    let events = a.progress.events();
+    let total = fibers.len();
+    for (index, (fiber, mua, label)) in fibers.into_iter().enumerate() {
+        let png = match &a.out {
+            Some(dir) if total > 1 => Some(dir.join(format!("{label}.png"))),
+            o => o.clone(),
+        };
+        events.emit(
+            json!({"event": "trace_started", "fiber": label, "index": index,
+            "total": total, "photons": a.photons}),
+        );
+        trace_one(&a, &pool, grid, (&fiber, mua, &label), png.as_deref())?;
+        events.emit(
+            json!({"event": "trace_finished", "fiber": label, "index": index,
+            "total": total}),
+        );
+    }
+    Ok(())
+}
+
+/// Traces one fiber as `a` asks and reports it (summary or JSON line, and the PNG).
+fn trace_one(
+    a: &TraceArgs,
+    pool: &rayon::ThreadPool,
+    grid: AngularGrid,
+    (fiber, mua, label): (&Fiber, f64, &str),
+    png: Option<&std::path::Path>,
+) -> anyhow::Result<()> {
     let inc = Incident::from_deg(a.theta_i, a.phi_i);
-    let bar = (!a.json).then(|| crate::cli::progress::bar(a.photons, "photons"));
+    let bar =
+        (!a.json && a.progress.bar()).then(|| crate::cli::progress::bar(a.photons, "photons"));
     let o = TraceOptions {
         photons: a.photons,
         seed: a.seed,
@@ -326,12 +423,7 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
         mua_per_um: vec![mua],
         progress: crate::cli::progress::reporter(&bar),
     };
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = a.threads {
-        builder = builder.num_threads(t);
-    }
-    let pool = builder.build()?;
-    let r = pool.install(|| trace(&fiber, inc, &o));
+    let r = pool.install(|| trace(fiber, inc, &o));
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -339,7 +431,7 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
     let (albedo, albedo_se) = t.albedo(0);
     let (h2, h2_se) = t.hist2d(0);
     let (dh, dh_se) = t.dphi_hist(0);
-    if let Some(png) = &a.png {
+    if let Some(png) = png {
         // Radiance-like density: fraction per solid angle and cos θo.
         let (nt, np) = (grid.n_theta, grid.n_phi);
         let density: Vec<f64> = (0..nt * np)
@@ -411,7 +503,7 @@ fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
             r.photons_per_s() / 1e6,
             r.seconds
         )?;
-        if let Some(png) = &a.png {
+        if let Some(png) = png.filter(|_| !a.progress.quiet) {
             outln!("  wrote {}", png.display())?;
         }
     }

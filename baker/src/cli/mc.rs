@@ -85,8 +85,8 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
     }
     let stack = if let Some(spec) = &a.spec {
         let s = load_spec(spec)?;
-        let name = a.entry.as_deref().unwrap();
-        let entries = super::optics::evaluate_entries(&s, Some(name))?;
+        let name = a.entry.clone().unwrap();
+        let entries = super::optics::evaluate_entries(&s, &[name])?;
         let i = super::optics::wavelength_index(&s, a.lambda_nm.unwrap(), "--lambda-nm")?;
         transport::stack::from_skin(&entries[0], i)
     } else if let Some(path) = &a.stack {

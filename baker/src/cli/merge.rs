@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::observer::{ProgressMode, Terminal};
+use super::observer::ProgressArgs;
 
 #[derive(Debug, Args)]
 pub struct MergeArgs {
@@ -14,20 +14,13 @@ pub struct MergeArgs {
     /// Output root (as `baker bake --out`).
     #[arg(short = 'o', long = "out", default_value = "out")]
     pub out: PathBuf,
-    /// Progress (as `baker bake --progress`).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub progress: ProgressMode,
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub progress: ProgressArgs,
+    /// Worker threads (default: all cores). The tables do not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
 }
 
 pub fn run(m: MergeArgs) -> anyhow::Result<()> {
-    crate::bake::merge::merge(
-        &m.shards,
-        &m.out,
-        m.threads,
-        Terminal::events(m.progress, m.quiet),
-    )
+    crate::bake::merge::merge(&m.shards, &m.out, m.threads, m.progress.events())
 }

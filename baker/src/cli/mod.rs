@@ -19,18 +19,20 @@ macro_rules! out {
 mod bake;
 mod bench;
 mod cache;
+#[cfg(test)]
+mod conventions;
 mod export;
 mod fiber;
+mod init;
 mod mc;
 mod merge;
 mod observer;
 mod optics;
 mod plan;
 mod progress;
+mod shell;
 mod slurm;
 mod validate;
-
-use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
@@ -47,11 +49,9 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Check a spec without baking: prints the entries it defines, or every error with file:line.
-    Validate {
-        /// Spec file (YAML).
-        spec: PathBuf,
-    },
+    /// Check specs without baking: prints the entries they define, or every error with
+    /// file:line.
+    Validate(validate::ValidateArgs),
     /// Per-layer optical properties of skin entries (thesis ch. 3): d, η, μa(λ), μs′(λ),
     /// junction and surface parameters.
     Optics(optics::OpticsArgs),
@@ -79,11 +79,35 @@ pub enum Command {
     /// Manage the work-unit cache.
     #[command(subcommand)]
     Cache(cache::CacheCommand),
+    /// Write a commented starter spec (skin or fiber) to begin from.
+    Init(init::InitArgs),
+    /// Shell completions for bash, zsh, fish, elvish or PowerShell.
+    Completions(shell::CompletionsArgs),
+    /// Manual pages (roff): baker.1 on standard output, or every command's page into a folder.
+    Man(shell::ManArgs),
+}
+
+/// A command's text result to standard output, or atomically to `out` (announced unless
+/// quiet).
+fn emit_table(
+    text: &str,
+    out: Option<&std::path::Path>,
+    progress: &observer::ProgressArgs,
+) -> anyhow::Result<()> {
+    match out {
+        Some(path) => {
+            crate::output::atomic::write(path, text.as_bytes())
+                .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))?;
+            progress.note(format!("wrote {}", path.display()));
+            Ok(())
+        }
+        None => Ok(out!("{text}")?),
+    }
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Validate { spec } => validate::run(&spec),
+        Command::Validate(a) => validate::run(a),
         Command::Optics(a) => optics::run(a),
         Command::Bake(a) => bake::run(a),
         Command::Mc(a) => mc::run(a),
@@ -94,5 +118,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Plan(p) => plan::run(p),
         Command::Cache(c) => cache::run(c),
         Command::Slurm(a) => slurm::run(a),
+        Command::Init(a) => init::run(a),
+        Command::Completions(a) => shell::completions(a),
+        Command::Man(a) => shell::man(a),
     }
 }

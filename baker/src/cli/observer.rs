@@ -80,3 +80,36 @@ impl Bar for ProgressBar {
         self.finish_and_clear();
     }
 }
+
+/// `-q/--quiet` and `--progress`, the same on every long-running command.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ProgressArgs {
+    /// Print nothing but errors and warnings: no progress, no summary, no "wrote" lines.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Progress on stderr: `auto` (a bar on a terminal, a line every ~5 % otherwise), `bar`,
+    /// `json` (one JSON event per line, for pipeline tools), `none`.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub progress: ProgressMode,
+}
+
+impl ProgressArgs {
+    /// The events these flags ask for.
+    pub fn events(&self) -> Events {
+        Terminal::events(self.progress, self.quiet)
+    }
+
+    /// Whether a progress bar may be drawn (a terminal, `auto` or `bar`, not quiet).
+    pub fn bar(&self) -> bool {
+        !self.quiet
+            && matches!(self.progress, ProgressMode::Auto | ProgressMode::Bar)
+            && std::io::stderr().is_terminal()
+    }
+
+    /// Prints a note on stderr unless quiet.
+    pub fn note(&self, msg: impl AsRef<str>) {
+        if !self.quiet {
+            eprintln!("{}", msg.as_ref());
+        }
+    }
+}

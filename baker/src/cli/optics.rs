@@ -12,98 +12,131 @@ use crate::spec::SkinSpec;
 
 #[derive(Debug, Args)]
 pub struct OpticsArgs {
-    /// Spec file (YAML).
-    pub spec: PathBuf,
-    /// Only this entry (default: all).
+    /// Skin spec files (YAML).
+    #[arg(required = true)]
+    pub specs: Vec<PathBuf>,
+    /// Only this entry (repeatable; default: all).
+    #[arg(long = "entry", value_name = "NAME")]
+    pub entries: Vec<String>,
+    /// Print one JSON document per spec (format `baker.skin-optics`, see formats/FORMAT.md) to
+    /// stdout; with several specs, one document per line.
     #[arg(long)]
-    pub entry: Option<String>,
-    /// Print one JSON document (format `baker.skin-optics`, see formats/FORMAT.md) to stdout.
-    #[arg(long, conflicts_with = "csv")]
     pub json: bool,
-    /// Write one CSV per entry into DIR.
-    #[arg(long, value_name = "DIR")]
-    pub csv: Option<PathBuf>,
-    /// Write PNG plots of μa(λ) and μs′(λ) per entry into DIR.
-    #[arg(long, value_name = "DIR")]
-    pub plot: Option<PathBuf>,
-    /// Write an MCML input file (.mci) for --entry at this wavelength (nm, on the spec's grid).
-    #[arg(long, value_name = "LAMBDA_NM", requires = "entry")]
+    /// Write one CSV per entry into the output folder.
+    #[arg(long)]
+    pub csv: bool,
+    /// Write PNG plots of μa(λ) and μs′(λ) per entry into the output folder.
+    #[arg(long)]
+    pub plots: bool,
+    /// Write an MCML input file (.mci) per entry at this wavelength (nm, on the spec's grid),
+    /// named `<entry>_<λ>nm.mci`, into the output folder.
+    #[arg(long, value_name = "LAMBDA_NM")]
     pub mci: Option<f64>,
-    /// Where to write the .mci file (default: <entry>_<λ>nm.mci).
-    #[arg(long, value_name = "FILE", requires = "mci")]
-    pub mci_out: Option<PathBuf>,
     /// Photons written into the .mci file.
     #[arg(long, default_value_t = 1_000_000, requires = "mci")]
     pub photons: u64,
+    /// Output folder of --csv, --plots and --mci, created if needed (default: the current
+    /// directory).
+    #[arg(short = 'o', long, value_name = "DIR", default_value = ".")]
+    pub out: PathBuf,
+    /// No "wrote" lines on stderr (errors still go there).
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
-/// Evaluates the model for the selected entries of `spec`.
+/// Evaluates the model for the entries of `spec` that `only` names (all when empty); a name
+/// that is not in the spec is a usage error.
 pub fn evaluate_entries(
     spec: &SkinSpec,
-    only: Option<&str>,
+    only: &[String],
 ) -> anyhow::Result<Vec<formats::OpticsEntry>> {
-    let selected: Vec<_> = spec
-        .entries
-        .iter()
-        .filter(|e| only.is_none_or(|n| e.name == n))
-        .collect();
-    if selected.is_empty() {
-        let names: Vec<&str> = spec.entries.iter().map(|e| e.name.as_str()).collect();
-        return Err(UsageError(format!(
-            "{}: no entry named {:?}; entries: {}",
-            spec.file,
-            only.unwrap_or(""),
-            names.join(", ")
-        ))
-        .into());
+    let names: Vec<&str> = spec.entries.iter().map(|e| e.name.as_str()).collect();
+    for name in only {
+        if !names.contains(&name.as_str()) {
+            return Err(UsageError(format!(
+                "{}: no entry named {name:?}; entries: {}",
+                spec.file,
+                names.join(", ")
+            ))
+            .into());
+        }
     }
-    Ok(crate::bake::skin::optics_of(spec, |e| {
-        only.is_none_or(|n| e.name == n)
-    }))
+    let selects = |n: &str| only.is_empty() || only.iter().any(|o| o == n);
+    Ok(crate::bake::skin::optics_of(spec, |e| selects(&e.name)))
 }
 
 pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
-    let spec = load_spec(&a.spec)?;
-    let entries = evaluate_entries(&spec, a.entry.as_deref())?;
+    // Every spec and entry name is checked before anything is written.
+    let mut loaded = Vec::new();
+    for path in &a.specs {
+        let spec = load_spec(path)?;
+        if a.entries.is_empty() || spec.entries.iter().any(|e| a.entries.contains(&e.name)) {
+            loaded.push(spec);
+        }
+    }
+    let known = |n: &String| {
+        loaded
+            .iter()
+            .any(|s| s.entries.iter().any(|e| &e.name == n))
+    };
+    if let Some(missing) = a.entries.iter().find(|n| !known(n)) {
+        let spec = load_spec(&a.specs[0])?;
+        evaluate_entries(&spec, std::slice::from_ref(missing))?;
+    }
+    for spec in &loaded {
+        if let Some(lambda) = a.mci {
+            wavelength_index(spec, lambda, "--mci")?;
+        }
+    }
+    for spec in &loaded {
+        let here: Vec<String> = (a.entries.iter())
+            .filter(|n| spec.entries.iter().any(|e| &e.name == *n))
+            .cloned()
+            .collect();
+        let entries = evaluate_entries(spec, &here)?;
+        report(&a, spec, &entries)?;
+    }
+    Ok(())
+}
+
+/// The outputs `a` asks for, of one spec's evaluated entries.
+fn report(a: &OpticsArgs, spec: &SkinSpec, entries: &[formats::OpticsEntry]) -> anyhow::Result<()> {
     let lam = spec.wavelengths.lambda_nm();
-    let mut wrote_files = false;
-    if let Some(dir) = &a.csv {
-        for e in &entries {
-            let p = dir.join(format!("{}.csv", e.name));
-            atomic::write(&p, output::csv::entry_csv(lam, e).as_bytes())
-                .with_context(|| format!("writing {}", p.display()))?;
+    let note = |p: &Path| {
+        if !a.quiet {
             eprintln!("wrote {}", p.display());
         }
-        wrote_files = true;
+    };
+    if a.csv {
+        for e in entries {
+            let p = a.out.join(format!("{}.csv", e.name));
+            atomic::write(&p, output::csv::entry_csv(lam, e).as_bytes())
+                .with_context(|| format!("writing {}", p.display()))?;
+            note(&p);
+        }
     }
-    if let Some(dir) = &a.plot {
-        write_plots(dir, lam, &entries)?;
-        wrote_files = true;
+    if a.plots {
+        for p in output::plot::optics_plots(&a.out, lam, entries)? {
+            note(&p);
+        }
     }
     if let Some(lambda) = a.mci {
-        let e = &entries[0];
-        let i = wavelength_index(&spec, lambda, "--mci")?;
-        let path = a
-            .mci_out
-            .clone()
-            .unwrap_or_else(|| PathBuf::from(format!("{}_{}nm.mci", e.name, lambda)));
-        let mco = path
-            .with_extension("mco")
-            .file_name()
-            .unwrap()
-            .to_string_lossy()
-            .to_string();
-        let text = output::mci::mci(e, i, lambda, &MciRun::new(mco, a.photons));
-        atomic::write(&path, text.as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?;
-        eprintln!("wrote {}", path.display());
-        wrote_files = true;
+        let i = wavelength_index(spec, lambda, "--mci")?;
+        for e in entries {
+            let name = format!("{}_{}nm", e.name, lambda);
+            let path = a.out.join(format!("{name}.mci"));
+            let text =
+                output::mci::mci(e, i, lambda, &MciRun::new(format!("{name}.mco"), a.photons));
+            atomic::write(&path, text.as_bytes())
+                .with_context(|| format!("writing {}", path.display()))?;
+            note(&path);
+        }
     }
     if a.json {
-        let doc = crate::skin::document::document(&spec.file, lam, entries);
-        outln!("{}", serde_json::to_string_pretty(&doc)?)?;
-    } else if !wrote_files {
-        out!("{}", text_report(lam, &entries))?;
+        let doc = crate::skin::document::document(&spec.file, lam, entries.to_vec());
+        outln!("{}", serde_json::to_string(&doc)?)?;
+    } else if !(a.csv || a.plots || a.mci.is_some()) {
+        out!("{}", text_report(lam, entries))?;
     }
     Ok(())
 }
@@ -122,17 +155,6 @@ pub fn wavelength_index(spec: &SkinSpec, lambda_nm: f64, flag: &str) -> anyhow::
             ))
             .into()
         })
-}
-
-pub fn write_plots(
-    dir: &Path,
-    lam: &[f64],
-    entries: &[formats::OpticsEntry],
-) -> anyhow::Result<()> {
-    for p in output::plot::optics_plots(dir, lam, entries)? {
-        eprintln!("wrote {}", p.display());
-    }
-    Ok(())
 }
 
 /// Human-readable listing: structure, junction and surface, then a λ table per entry.

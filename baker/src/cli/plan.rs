@@ -12,14 +12,18 @@ pub struct PlanArgs {
     #[arg(required = true)]
     pub specs: Vec<PathBuf>,
     /// Output root whose cache is consulted (as `baker bake --out`).
-    #[arg(long, default_value = "out")]
+    #[arg(short = 'o', long, default_value = "out")]
     pub out: PathBuf,
+    /// Unit cache directory (default: OUT/.cache), as `baker bake --cache`.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
+    /// Photon packets per simulation or direction, as `baker bake --photons`.
     #[arg(long)]
     pub photons: Option<u64>,
+    /// Plan only this entry (repeatable), as `baker bake --entry`.
     #[arg(long = "entry", value_name = "NAME")]
     pub entries: Vec<String>,
+    /// Skin: one simulation per entry, as `baker bake --no-reuse`.
     #[arg(long)]
     pub no_reuse: bool,
     /// Worker threads the bake will run (for the memory bound; default: all cores).

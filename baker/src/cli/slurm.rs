@@ -47,7 +47,7 @@ pub struct SlurmArgs {
     #[arg(long, value_parser = parse_mem)]
     pub mem: Option<String>,
     /// Output root of the merge; each spec ends up in OUT/<spec name>/, as with `baker bake`.
-    #[arg(long, default_value = "out")]
+    #[arg(short = 'o', long, default_value = "out")]
     pub out: PathBuf,
     /// Directory for the job scripts, logs and shard directories [default: slurm/<first spec
     /// name>].
@@ -66,6 +66,12 @@ pub struct SlurmArgs {
     /// Submit the jobs with `sbatch` and print their ids (otherwise run `WORK/submit.sh`).
     #[arg(long)]
     pub submit: bool,
+    /// Bake only this entry (repeatable), as `baker bake --entry`.
+    #[arg(long = "entry", value_name = "NAME")]
+    pub entries: Vec<String>,
+    /// Print only errors (and, with --submit, the job ids).
+    #[arg(short, long)]
+    pub quiet: bool,
     /// Extra `baker bake` arguments for every shard, after `--`: `-- --photons 20000`.
     #[arg(last = true, value_name = "BAKE_ARGS")]
     pub bake_args: Vec<String>,
@@ -73,7 +79,14 @@ pub struct SlurmArgs {
 
 /// `baker bake` flags that `baker slurm` sets itself, per shard. (`--cache`: each shard keeps
 /// its units in its own directory, where `baker merge` collects them.)
-const RESERVED_BAKE_FLAGS: [&str; 5] = ["--out", "--shard", "--threads", "--progress", "--cache"];
+const RESERVED_BAKE_FLAGS: [&str; 6] = [
+    "--out",
+    "-o",
+    "--shard",
+    "--threads",
+    "--progress",
+    "--cache",
+];
 
 impl SlurmArgs {
     /// The flags as the library's request.
@@ -89,8 +102,17 @@ impl SlurmArgs {
             work: self.work.clone(),
             threads: self.threads,
             job_name: self.job_name.clone(),
-            bake_args: self.bake_args.clone(),
+            bake_args: self.bake_args_with_entries(),
         }
+    }
+
+    /// The extra bake arguments, with `--entry NAME` for each `--entry` of this command.
+    fn bake_args_with_entries(&self) -> Vec<String> {
+        let mut args = self.bake_args.clone();
+        for e in &self.entries {
+            args.extend(["--entry".to_string(), e.clone()]);
+        }
+        args
     }
 }
 
@@ -100,7 +122,7 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<()> {
         crate::bake::load_checked(spec, &crate::spec::budget::Overrides::none())?;
         crate::bake::spec_stem(spec)?;
     }
-    check_bake_args(&a.specs, &a.bake_args)?;
+    check_bake_args(&a.specs, &a.bake_args_with_entries())?;
 
     let cwd = std::env::current_dir().context("reading the current directory")?;
     let baker = match &a.baker {
@@ -126,12 +148,16 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<()> {
         }
     }
     let work = plan.work.display();
-    outln!(
-        "wrote {work}/bake.sbatch ({} shards), {work}/merge.sbatch, {work}/submit.sh",
-        plan.shards
-    )?;
+    if !a.quiet {
+        outln!(
+            "wrote {work}/bake.sbatch ({} shards), {work}/merge.sbatch, {work}/submit.sh",
+            plan.shards
+        )?;
+    }
     if !a.submit {
-        outln!("submit with: {}", shell_quote(&format!("{work}/submit.sh")))?;
+        if !a.quiet {
+            outln!("submit with: {}", shell_quote(&format!("{work}/submit.sh")))?;
+        }
         return Ok(());
     }
 
@@ -139,7 +165,9 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<()> {
     outln!("bake array job {array}")?;
     let merge = sbatch("sbatch", &plan.sbatch_merge_args(&array))?;
     outln!("merge job {merge}")?;
-    outln!("logs: {work}/logs/  output: {}/", plan.out.display())?;
+    if !a.quiet {
+        outln!("logs: {work}/logs/  output: {}/", plan.out.display())?;
+    }
     Ok(())
 }
 
@@ -147,7 +175,11 @@ pub fn run(a: SlurmArgs) -> anyhow::Result<()> {
 /// per shard.
 fn check_bake_args(specs: &[PathBuf], bake_args: &[String]) -> anyhow::Result<()> {
     for arg in bake_args {
-        let flag = arg.split('=').next().unwrap_or(arg);
+        // `--out=X`, and `-oX` (a short flag with its value attached).
+        let flag = match arg.split('=').next().unwrap_or(arg) {
+            f if f.starts_with("-o") && !f.starts_with("--") => "-o",
+            f => f,
+        };
         if RESERVED_BAKE_FLAGS.contains(&flag) {
             return Err(UsageError(format!(
                 "extra bake argument {arg:?}: baker slurm sets {} itself (see --work, --out, \
@@ -599,9 +631,11 @@ mod tests {
             "--threads",
             "--progress=bar",
             "--cache",
+            "-o",
+            "-ox",
         ] {
             let e = check_bake_args(&specs, &[reserved.into(), "1".into()]).unwrap_err();
-            assert!(e.to_string().contains("sets --out, --shard"), "{e}");
+            assert!(e.to_string().contains("sets --out, -o, --shard"), "{e}");
         }
         assert!(check_bake_args(&specs, &["--photons".into(), "100".into()]).is_ok());
         let e = check_bake_args(&specs, &["--no-such-flag".into()]).unwrap_err();

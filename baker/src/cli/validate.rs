@@ -1,11 +1,57 @@
-//! `baker validate`: a spec checked as `baker bake` checks it, and what it defines.
+//! `baker validate`: specs checked as `baker bake` checks them, and what they define.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::bake::Request;
+
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    /// Spec files (YAML); every one is checked, and every error of each is listed.
+    #[arg(required = true)]
+    pub specs: Vec<PathBuf>,
+    /// Check that this entry exists (repeatable) and list only the entries asked for.
+    #[arg(long = "entry", value_name = "NAME")]
+    pub entries: Vec<String>,
+    /// Print nothing when the specs are valid (the exit code says it: 0 valid, 2 not).
+    #[arg(short, long)]
+    pub quiet: bool,
+}
 
 /// `baker validate`: the checks `baker bake` makes before it writes anything — the same code
-/// path — and what the spec defines.
-pub fn run(spec: &std::path::Path) -> anyhow::Result<()> {
-    let (s, cost) = crate::bake::load_checked(spec, &crate::spec::budget::Overrides::none())?;
-    crate::bake::spec_stem(spec)?;
-    match &s {
+/// path, including the entry names a bake would be asked for — and what the specs define.
+pub fn run(a: ValidateArgs) -> anyhow::Result<()> {
+    let req = Request {
+        specs: a.specs.clone(),
+        entries: a.entries.clone(),
+        ..Request::default()
+    };
+    let (mut specs, mut costs) = (Vec::new(), Vec::new());
+    for path in &a.specs {
+        let (s, cost) = crate::bake::load_checked(path, &req.overrides())?;
+        crate::bake::spec_stem(path)?;
+        specs.push(s);
+        costs.push(cost);
+    }
+    crate::bake::check_entries(&req, &specs)?;
+    if a.quiet {
+        return Ok(());
+    }
+    for ((path, s), cost) in a.specs.iter().zip(&specs).zip(&costs) {
+        describe(path, s, cost, &req)?;
+    }
+    Ok(())
+}
+
+/// What one valid spec defines: its entries (those `req` selects) and its cost.
+fn describe(
+    spec: &Path,
+    s: &crate::spec::Spec,
+    cost: &crate::spec::budget::Cost,
+    req: &Request,
+) -> anyhow::Result<()> {
+    match s {
         crate::spec::Spec::Fiber(s) => {
             outln!(
                 "{}: ok, {} fibers, {} dyes (presets included); {}",
@@ -14,7 +60,7 @@ pub fn run(spec: &std::path::Path) -> anyhow::Result<()> {
                 s.dyes.len(),
                 cost.describe()
             )?;
-            for f in &s.fibers {
+            for f in s.fibers.iter().filter(|f| req.selects(&f.name)) {
                 outln!(
                     "  {} (line {}): {}, {:.2} µm, area {:.1} µm², {} hole(s), η {:.4}, β {:.2}°{}{}",
                     f.name,
@@ -48,7 +94,7 @@ pub fn run(spec: &std::path::Path) -> anyhow::Result<()> {
                 s.wavelengths.lambda_nm()[s.wavelengths.len() - 1],
                 cost.describe()
             )?;
-            for e in &s.entries {
+            for e in s.entries.iter().filter(|e| req.selects(&e.name)) {
                 outln!("  {} (line {})", e.name, e.line)?;
             }
         }

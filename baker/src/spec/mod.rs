@@ -19,6 +19,7 @@ pub mod limits;
 pub mod names;
 pub mod skin;
 mod syntax;
+pub mod templates;
 mod yaml;
 
 use std::path::Path;

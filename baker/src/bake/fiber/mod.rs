@@ -42,6 +42,15 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
     let mut settings = spec.bake.clone();
     if let Some(p) = a.photons {
         settings.photons = p;
+        let traced = settings.photons_per_direction();
+        if traced != p {
+            job.runner.events.notice(format!(
+                "--photons {p}: a fiber direction traces whole batches of {} photons, at least \
+                 two, so {}: {traced} photons per direction",
+                settings.batch,
+                crate::files::Shown(job.path)
+            ));
+        }
     }
     let mut reports = Vec::new();
     let mut files = Vec::new();
