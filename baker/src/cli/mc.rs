@@ -1,7 +1,7 @@
 //! `baker mc`: layered Monte Carlo transport of a stack file, an MCML input file, or a skin
 //! spec entry at one wavelength.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
@@ -9,6 +9,7 @@ use clap::Args;
 use super::optics::load_spec;
 use crate::error::UsageError;
 use crate::output::atomic;
+use crate::transport::engine::ROULETTE_WEIGHT;
 use crate::transport::{self, mcml, McOptions, McResult, Stack};
 
 #[derive(Debug, Args)]
@@ -17,17 +18,27 @@ pub struct McArgs {
     /// "eta", "mua_per_mm", "mus_per_mm", "g"}], "grid": {"dr_mm", "nr"}, "junction"?}.
     #[arg(conflicts_with_all = ["mci_in", "spec"])]
     pub stack: Option<PathBuf>,
-    /// Read an MCML input file instead (cm units; every run in it is simulated).
+    /// Read an MCML input file instead: MCML 1.x (`1.0`) or MCML 2.0 (`mcmli2.0`, with a media
+    /// list), cm units; every run in it is simulated and written as .mco under its own output
+    /// name.
     #[arg(long, value_name = "FILE.mci", conflicts_with = "spec")]
     pub mci_in: Option<PathBuf>,
-    /// Write MCML's output format (.mco). With --mci-in and no --mco, each run's own output
-    /// file name is used.
-    #[arg(long, value_name = "FILE")]
+    /// Where MCML's output format (.mco) goes. With --mci-in: a folder (created if missing)
+    /// that each run's output name is joined to; without -o the names are relative to the
+    /// current directory, as MCML writes them. Names that would leave that folder (absolute
+    /// paths, `..`) are refused either way. With a STACK.json or --spec: FILE.mco, or an
+    /// existing folder to write baker.mco in; without -o no .mco is written.
+    #[arg(short = 'o', long = "out", value_name = "PATH")]
+    pub out: Option<PathBuf>,
+    /// Earlier name of -o for a stack: the .mco file itself (with --mci-in and several runs,
+    /// FILE.<k>.mco for run k counted from 0).
+    #[arg(long, value_name = "FILE", hide = true, conflicts_with = "out")]
     pub mco: Option<PathBuf>,
     /// Take the stack from a skin spec entry (with --entry and --lambda-nm).
     #[arg(long, value_name = "SPEC", requires_all = ["entry", "lambda_nm"])]
     pub spec: Option<PathBuf>,
-    #[arg(long, requires = "spec")]
+    /// Entry of the skin spec to simulate (with --spec).
+    #[arg(long, value_name = "NAME", requires = "spec")]
     pub entry: Option<String>,
     /// Wavelength of the skin entry, nm (on the spec's grid).
     #[arg(long, value_name = "NM", requires = "spec")]
@@ -44,6 +55,10 @@ pub struct McArgs {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     pub json: bool,
+    /// No progress bar and no "wrote FILE" notes on stderr (results still go to stdout,
+    /// warnings and errors to stderr).
+    #[arg(long, short)]
+    pub quiet: bool,
     /// With a junction, enter each packet at a random point of the junction's period cell and
     /// measure radii from there (the profile averaged over entry points, as `bake` does).
     #[arg(long)]
@@ -58,30 +73,7 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
         return Err(UsageError("--photons must be at least 1".into()).into());
     }
     if let Some(path) = &a.mci_in {
-        let text = crate::files::read_text(path, crate::files::MAX_SPEC_BYTES, "an .mci file")
-            .map_err(|e| UsageError(e.to_string()))?;
-        let runs =
-            mcml::parse_mci(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
-        for (k, run) in runs.iter().enumerate() {
-            let mut ok = o.clone();
-            if a.photons.is_none() {
-                ok.photons = run.photons; // the file's own photon count unless --photons is given
-            }
-            let (r, grid) = with_bar(&ok, a.json, |o| mcml::simulate_grid(run, o))?;
-            report(&r, a.json)?;
-            let out = match (&a.mco, runs.len()) {
-                (Some(p), 1) => p.clone(),
-                (Some(p), _) => p.with_extension(format!("{k}.mco")),
-                (None, _) => path
-                    .parent()
-                    .unwrap_or(std::path::Path::new("."))
-                    .join(&run.output_file),
-            };
-            atomic::write(&out, mcml::write_mco(run, &r, &grid).as_bytes())
-                .with_context(|| format!("writing {}", out.display()))?;
-            eprintln!("wrote {}", out.display());
-        }
-        return Ok(());
+        return run_mci(&a, &o, path);
     }
     let stack = if let Some(spec) = &a.spec {
         let s = load_spec(spec)?;
@@ -98,16 +90,79 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
         )
         .into());
     };
-    if let Some(out) = &a.mco {
+    let mco = match (&a.out, &a.mco) {
+        (Some(p), _) if p.is_dir() => Some(p.join("baker.mco")),
+        (Some(p), _) | (None, Some(p)) => Some(p.clone()),
+        (None, None) => None,
+    };
+    if let Some(out) = &mco {
         let run = mcml::McmlRun::from_stack(&stack, o.photons);
-        let (r, grid) = with_bar(&o, a.json, |o| mcml::simulate_grid(&run, o))?;
+        let (r, grid) = with_bar(&o, a.json || a.quiet, |o| mcml::simulate_grid(&run, o))?;
         report(&r, a.json)?;
-        atomic::write(out, mcml::write_mco(&run, &r, &grid).as_bytes())
-            .with_context(|| format!("writing {}", out.display()))?;
-        eprintln!("wrote {}", out.display());
+        write_mco(out, &run, &r, &grid, a.quiet)?;
     } else {
-        let r = with_bar(&o, a.json, |o| transport::run(&stack, o))?;
+        let r = with_bar(&o, a.json || a.quiet, |o| transport::run(&stack, o))?;
         report(&r, a.json)?;
+    }
+    Ok(())
+}
+
+/// `--mci-in`: every run of an MCML input file, each written as .mco where
+/// [`mcml::resolve_output`] puts its name (in `-o DIR`, else the current directory).
+fn run_mci(a: &McArgs, o: &McOptions, path: &Path) -> anyhow::Result<()> {
+    let text = crate::files::read_text(path, crate::files::MAX_SPEC_BYTES, "an .mci file")
+        .map_err(|e| UsageError(e.to_string()))?;
+    let runs =
+        mcml::parse_mci(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
+    let outs = runs
+        .iter()
+        .enumerate()
+        .map(|(k, run)| match (&a.mco, runs.len()) {
+            (Some(p), 1) => Ok(p.clone()),
+            (Some(p), _) => Ok(p.with_extension(format!("{k}.mco"))),
+            (None, _) => mcml::resolve_output(&run.output_file, a.out.as_deref()),
+        })
+        .collect::<Result<Vec<PathBuf>, String>>()
+        .map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    for (run, out) in runs.iter().zip(&outs) {
+        if run.threshold_weight != ROULETTE_WEIGHT && !a.json {
+            eprintln!(
+                "warning: {}: {}: threshold weight {} traced as {ROULETTE_WEIGHT} (roulette is \
+                 unbiased at any threshold; only the noise differs)",
+                path.display(),
+                run.output_file,
+                run.threshold_weight
+            );
+        }
+        let mut ok = o.clone();
+        if a.photons.is_none() {
+            ok.photons = run.photons; // the file's own photon count unless --photons is given
+        }
+        let (r, grid) = with_bar(&ok, a.json || a.quiet, |o| mcml::simulate_grid(run, o))?;
+        report(&r, a.json)?;
+        if let Some(parent) = out.parent().filter(|_| a.out.is_some()) {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
+        write_mco(out, run, &r, &grid, a.quiet)?;
+    }
+    Ok(())
+}
+
+fn write_mco(
+    out: &Path,
+    run: &mcml::McmlRun,
+    r: &McResult,
+    grid: &mcml::McmlGrid,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    atomic::write(out, mcml::write_mco(run, r, grid).as_bytes())
+        .with_context(|| format!("writing {}", out.display()))?;
+    if !quiet {
+        eprintln!("wrote {}", out.display());
     }
     Ok(())
 }
@@ -160,6 +215,9 @@ fn report(r: &McResult, json: bool) -> anyhow::Result<()> {
     outln!("transmittance        Tt   {:.6} ± {:.6}", r.tt, r.tt_se)?;
     for (i, (a, s)) in r.absorbed.iter().zip(&r.absorbed_se).enumerate() {
         outln!("absorbed in layer {i:<2}      {a:.6} ± {s:.6}")?;
+    }
+    if let (Some(a), Some(s)) = (r.absorbed_total, r.absorbed_total_se) {
+        outln!("absorbed in all layers A  {a:.6} ± {s:.6}")?;
     }
     outln!("∫Rd(r) over the grid      {:.6}", r.rd_r_integrated)?;
     outln!("energy balance            {:.6}", r.energy())?;
