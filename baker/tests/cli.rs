@@ -5,7 +5,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use common::{baker, repo, stderr};
+use common::{baker, baker_in, repo, stderr};
 
 /// A bad spec exits non-zero and names file:line:column, the field and the allowed values.
 #[track_caller]
@@ -340,7 +340,8 @@ fn mc_reads_mci_and_writes_mco() {
     let dir = tempfile::tempdir().unwrap();
     let mci = dir.path().join("two_runs.mci");
     std::fs::copy(repo().join("tests/stacks/two_runs.mci"), &mci).unwrap();
-    let o = baker(&["mc", "--mci-in", mci.to_str().unwrap(), "--json"]);
+    // Run in the folder: MCML's output names are relative to the current directory.
+    let o = baker_in(dir.path(), &["mc", "--mci-in", "two_runs.mci", "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(dir.path().join("bench.mco")).unwrap();
     assert!(text.starts_with("A1 \t# Version number of the file format."));
@@ -431,4 +432,169 @@ fn issue4_closed_stdout_ends_quietly() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(!String::from_utf8_lossy(&out.stderr).contains("panicked"));
+}
+
+/// MCML 2.0's own numbers for its stock samples (tests/stacks/mcml2/README.md: MCML 2.0 built
+/// from the public source, seed 1): output name, Rd, SE(Rd), A, SE(A).
+const MCML2_SAMPLES: [(&str, &str, f64, f64, f64, f64); 3] = [
+    (
+        "sample1.mci",
+        "sample1a.mco",
+        0.0972139,
+        0.000234288,
+        0.241819,
+        0.00018808,
+    ),
+    (
+        "sample1.mci",
+        "sample1b.mco",
+        0.220348,
+        0.000916117,
+        0.739652,
+        0.000916116,
+    ),
+    (
+        "sample2.mci",
+        "sample2.mco",
+        0.237859,
+        0.000311708,
+        0.641547,
+        0.000293194,
+    ),
+];
+
+/// `baker mc --mci-in` reads stock MCML 2.0 files (media list, layers naming media) and gives
+/// Rd and A within 3 combined SEs of MCML 2.0's run of the same files (sample 2 with a tenth
+/// of its photons). The outputs land in the current directory, not beside the input.
+#[test]
+fn mc_reads_stock_mcml2_inputs_like_mcml() {
+    let dir = tempfile::tempdir().unwrap();
+    let inputs = dir.path().join("inputs");
+    std::fs::create_dir(&inputs).unwrap();
+    let mut results: Vec<(String, serde_json::Value)> = Vec::new();
+    for (mci, photons) in [("sample1.mci", None), ("sample2.mci", Some("100000"))] {
+        std::fs::copy(
+            repo().join("tests/stacks/mcml2").join(mci),
+            inputs.join(mci),
+        )
+        .unwrap();
+        let input = format!("inputs/{mci}");
+        let mut args = vec!["mc", "--mci-in", &input, "--json", "-q"];
+        if let Some(n) = photons {
+            args.extend(["--photons", n]);
+        }
+        let o = baker_in(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).is_empty(), "-q: {}", stderr(&o));
+        for line in String::from_utf8_lossy(&o.stdout).lines() {
+            results.push((mci.to_string(), serde_json::from_str(line).unwrap()));
+        }
+    }
+    assert_eq!(results.len(), MCML2_SAMPLES.len());
+    for ((mci, v), (want_mci, out, rd, rd_se, a, a_se)) in results.iter().zip(MCML2_SAMPLES) {
+        assert_eq!(mci, want_mci);
+        assert!(
+            dir.path().join(out).is_file(),
+            "{out} not in the current directory"
+        );
+        assert!(!inputs.join(out).exists(), "{out} written beside the input");
+        let f = |k: &str| v[k].as_f64().unwrap();
+        for (what, xb, sb, xm, sm) in [
+            ("Rd", f("rd"), f("rd_se"), rd, rd_se),
+            ("A", f("absorbed_total"), f("absorbed_total_se"), a, a_se),
+        ] {
+            let bound = 3.0 * sb.hypot(sm);
+            assert!(
+                (xb - xm).abs() <= bound,
+                "{out} {what}: baker {xb} ± {sb}, MCML {xm} ± {sm}"
+            );
+        }
+    }
+}
+
+/// `-o DIR` puts the runs' outputs in DIR (created); a name that would leave it is refused
+/// naming the file and line; `-o` works for a stack too (a file, or a folder for baker.mco).
+#[test]
+fn mc_out_folder_holds_the_outputs_and_escapes_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(repo().join("tests/stacks/mcml2/sample1.mci")).unwrap();
+    let small = text
+        .replace("1000000\t10:00", "2000\t10:00")
+        .replace("100000\t10:00", "2000");
+    std::fs::write(dir.path().join("s.mci"), &small).unwrap();
+    let o = baker_in(dir.path(), &["mc", "--mci-in", "s.mci", "-o", "res/deep"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for out in ["sample1a.mco", "sample1b.mco"] {
+        assert!(dir.path().join("res/deep").join(out).is_file());
+        assert!(!dir.path().join(out).exists());
+    }
+    let line = small
+        .lines()
+        .position(|l| l.starts_with("sample1b.mco"))
+        .unwrap()
+        + 1;
+    for bad in ["../escape.mco", "/tmp/escape.mco"] {
+        std::fs::write(
+            dir.path().join("bad.mci"),
+            small.replace("sample1b.mco", bad),
+        )
+        .unwrap();
+        for args in [vec![], vec!["-o", "res"]] {
+            let mut a = vec!["mc", "--mci-in", "bad.mci"];
+            a.extend(args);
+            let o = baker_in(dir.path(), &a);
+            assert_eq!(o.status.code(), Some(2));
+            let e = stderr(&o);
+            assert!(
+                e.contains(&format!("bad.mci: line {line}:")) && e.contains(bad),
+                "{e}"
+            );
+        }
+    }
+    assert!(
+        !dir.path().join("escape.mco").exists() && !dir.path().join("res/sample1a.mco").exists()
+    );
+    let stack = repo().join("tests/stacks/mcml_benchmark.json");
+    let stack = stack.to_str().unwrap();
+    let o = baker_in(
+        dir.path(),
+        &["mc", stack, "--photons", "2000", "-o", "res", "-q"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.path().join("res/baker.mco").is_file());
+    let o = baker_in(
+        dir.path(),
+        &["mc", stack, "--photons", "2000", "--out", "x.mco"],
+    );
+    assert!(o.status.success() && dir.path().join("x.mco").is_file());
+}
+
+/// Every flag of `baker mc` has a help line.
+#[test]
+fn mc_flags_all_have_help() {
+    let o = baker(&["mc", "--help"]);
+    let help = String::from_utf8_lossy(&o.stdout).to_string();
+    let options = help.split("Options:").nth(1).unwrap();
+    let mut flags = Vec::new();
+    for line in options.lines().filter(|l| l.trim_start().starts_with('-')) {
+        // `  -q, --quiet   text` / `      --out <PATH>   text`: the text after flag and value.
+        let mut words = line.split_whitespace().peekable();
+        if words.peek().is_some_and(|w| w.ends_with(',')) {
+            words.next();
+        }
+        flags.push(words.next().unwrap().to_string());
+        let rest: Vec<&str> = words.skip_while(|w| w.starts_with('<')).collect();
+        assert!(!rest.is_empty(), "{line:?} has no help:\n{help}");
+    }
+    for flag in [
+        "--mci-in",
+        "--out",
+        "--entry",
+        "--lambda-nm",
+        "--quiet",
+        "--json",
+    ] {
+        assert!(flags.iter().any(|f| f == flag), "{flag} missing:\n{help}");
+    }
+    assert!(!help.contains("--mco"), "--mco is a hidden alias");
 }

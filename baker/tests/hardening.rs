@@ -129,6 +129,11 @@ fn every_writing_command_leaves_devices_and_fifos_what_they_were() {
         d.join("stack.json"),
     )
     .unwrap();
+    std::fs::copy(
+        repo().join("tests/stacks/two_runs.mci"),
+        d.join("two_runs.mci"),
+    )
+    .unwrap();
     // Tables to export, and a shard to merge.
     let o = baker(d, &["bake", "skin.yaml", "fib.yaml", "--out", "out", "-q"]);
     assert!(o.status.success(), "{}", err(&o));
@@ -189,6 +194,11 @@ fn every_writing_command_leaves_devices_and_fifos_what_they_were() {
             vec!["mc", "stack.json", "--photons", "2000", "--mco", "@"],
             true,
         ),
+        (
+            vec!["mc", "stack.json", "--photons", "2000", "-o", "@", "-q"],
+            true,
+        ),
+        (vec!["mc", "--mci-in", "two_runs.mci", "-o", "@"], false),
         (
             vec![
                 "fiber",

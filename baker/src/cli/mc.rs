@@ -1,7 +1,7 @@
 //! `baker mc`: layered Monte Carlo transport of a stack file, an MCML input file, or a skin
 //! spec entry at one wavelength.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
@@ -9,6 +9,7 @@ use clap::Args;
 use super::optics::load_spec;
 use crate::error::UsageError;
 use crate::output::atomic;
+use crate::transport::engine::ROULETTE_WEIGHT;
 use crate::transport::{self, mcml, McOptions, McResult, Stack};
 
 #[derive(Debug, Args)]
@@ -17,18 +18,29 @@ pub struct McArgs {
     /// "eta", "mua_per_mm", "mus_per_mm", "g"}], "grid": {"dr_mm", "nr"}, "junction"?}.
     #[arg(conflicts_with_all = ["mci_in", "spec"])]
     pub stack: Option<PathBuf>,
-    /// Read an MCML input file instead (cm units; every run in it is simulated).
+    /// Read an MCML input file instead: MCML 1.x (`1.0`) or MCML 2.0 (`mcmli2.0`, with a media
+    /// list), cm units; every run in it is simulated and written as .mco under its own output
+    /// name.
     #[arg(long, value_name = "FILE.mci", conflicts_with = "spec")]
     pub mci_in: Option<PathBuf>,
-    /// Write MCML's output format (.mco). With --mci-in and no --mco, each run's own output
-    /// file name is used.
-    #[arg(long, value_name = "FILE")]
+    /// Where MCML's output format (.mco) goes. With --mci-in: a folder (created if missing)
+    /// that each run's output name is joined to; without -o the names are relative to the
+    /// current directory, as MCML writes them. Names that would leave that folder (absolute
+    /// paths, `..`) are refused either way. With a STACK.json or one --entry: FILE.mco, or an
+    /// existing folder to write baker.mco (or <entry>.mco) in; with several --entry, a folder
+    /// (created if missing) of <entry>.mco files; without -o no .mco is written.
+    #[arg(short = 'o', long = "out", value_name = "PATH")]
+    pub out: Option<PathBuf>,
+    /// Earlier name of -o for a stack: the .mco file itself (with --mci-in and several runs,
+    /// FILE.<k>.mco for run k counted from 0).
+    #[arg(long, value_name = "FILE", hide = true, conflicts_with = "out")]
     pub mco: Option<PathBuf>,
     /// Take the stack from a skin spec entry (with --entry and --lambda-nm).
-    #[arg(long, value_name = "SPEC", requires_all = ["entry", "lambda_nm"])]
+    #[arg(long, value_name = "SPEC", requires_all = ["entries", "lambda_nm"])]
     pub spec: Option<PathBuf>,
-    #[arg(long, requires = "spec")]
-    pub entry: Option<String>,
+    /// Entry of the skin spec to simulate (with --spec; repeatable: each is simulated in turn).
+    #[arg(long = "entry", value_name = "NAME", requires = "spec")]
+    pub entries: Vec<String>,
     /// Wavelength of the skin entry, nm (on the spec's grid).
     #[arg(long, value_name = "NM", requires = "spec")]
     pub lambda_nm: Option<f64>,
@@ -44,6 +56,8 @@ pub struct McArgs {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub progress: super::observer::ProgressArgs,
     /// With a junction, enter each packet at a random point of the junction's period cell and
     /// measure radii from there (the profile averaged over entry points, as `bake` does).
     #[arg(long)]
@@ -58,67 +72,133 @@ pub fn run(a: McArgs) -> anyhow::Result<()> {
         return Err(UsageError("--photons must be at least 1".into()).into());
     }
     if let Some(path) = &a.mci_in {
-        let text = crate::files::read_text(path, crate::files::MAX_SPEC_BYTES, "an .mci file")
-            .map_err(|e| UsageError(e.to_string()))?;
-        let runs =
-            mcml::parse_mci(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
-        for (k, run) in runs.iter().enumerate() {
-            let mut ok = o.clone();
-            if a.photons.is_none() {
-                ok.photons = run.photons; // the file's own photon count unless --photons is given
-            }
-            let (r, grid) = with_bar(&ok, a.json, |o| mcml::simulate_grid(run, o))?;
-            report(&r, a.json)?;
-            let out = match (&a.mco, runs.len()) {
-                (Some(p), 1) => p.clone(),
-                (Some(p), _) => p.with_extension(format!("{k}.mco")),
-                (None, _) => path
-                    .parent()
-                    .unwrap_or(std::path::Path::new("."))
-                    .join(&run.output_file),
-            };
-            atomic::write(&out, mcml::write_mco(run, &r, &grid).as_bytes())
-                .with_context(|| format!("writing {}", out.display()))?;
-            eprintln!("wrote {}", out.display());
-        }
-        return Ok(());
+        return run_mci(&a, &o, path);
     }
-    let stack = if let Some(spec) = &a.spec {
-        let s = load_spec(spec)?;
-        let name = a.entry.clone().unwrap();
-        let entries = super::optics::evaluate_entries(&s, &[name])?;
-        let i = super::optics::wavelength_index(&s, a.lambda_nm.unwrap(), "--lambda-nm")?;
-        transport::stack::from_skin(&entries[0], i)
-    } else if let Some(path) = &a.stack {
-        read_stack(path)?
-    } else {
-        return Err(UsageError(
-            "give a STACK.json, --mci-in FILE.mci, or --spec SPEC --entry NAME --lambda-nm NM"
-                .into(),
-        )
-        .into());
-    };
-    if let Some(out) = &a.mco {
-        let run = mcml::McmlRun::from_stack(&stack, o.photons);
-        let (r, grid) = with_bar(&o, a.json, |o| mcml::simulate_grid(&run, o))?;
-        report(&r, a.json)?;
-        atomic::write(out, mcml::write_mco(&run, &r, &grid).as_bytes())
-            .with_context(|| format!("writing {}", out.display()))?;
-        eprintln!("wrote {}", out.display());
-    } else {
-        let r = with_bar(&o, a.json, |o| transport::run(&stack, o))?;
-        report(&r, a.json)?;
+    let stacks = stacks_of(&a)?;
+    let events = a.progress.events();
+    let total = stacks.len();
+    for (index, (name, stack)) in stacks.iter().enumerate() {
+        let mco = match (&a.out, &a.mco) {
+            (Some(p), _) if total > 1 => {
+                std::fs::create_dir_all(p).with_context(|| format!("creating {}", p.display()))?;
+                Some(p.join(format!("{name}.mco")))
+            }
+            (Some(p), _) if p.is_dir() => Some(p.join(format!("{name}.mco"))),
+            (Some(p), _) | (None, Some(p)) => Some(p.clone()),
+            (None, None) => None,
+        };
+        events.emit(
+            serde_json::json!({"event": "run_started", "run": name, "index": index,
+            "total": total, "photons": o.photons}),
+        );
+        let hide = a.json || !a.progress.bar();
+        if let Some(out) = &mco {
+            let run = mcml::McmlRun::from_stack(stack, o.photons);
+            let (r, grid) = with_bar(&o, hide, |o| mcml::simulate_grid(&run, o))?;
+            report(&r, a.json)?;
+            write_mco(out, &run, &r, &grid, a.progress.quiet)?;
+        } else {
+            let r = with_bar(&o, hide, |o| transport::run(stack, o))?;
+            report(&r, a.json)?;
+        }
+        events.emit(
+            serde_json::json!({"event": "run_finished", "run": name, "index": index,
+            "total": total}),
+        );
     }
     Ok(())
 }
 
-/// Runs `f` with a progress bar over `o.photons` on a terminal (none with `--json`).
+/// The stacks to simulate, named: each `--entry` of `--spec` at `--lambda-nm`, or the stack
+/// file (`baker`).
+fn stacks_of(a: &McArgs) -> anyhow::Result<Vec<(String, Stack)>> {
+    if let Some(spec) = &a.spec {
+        let s = load_spec(spec)?;
+        let entries = super::optics::evaluate_entries(&s, &a.entries)?;
+        let i = super::optics::wavelength_index(&s, a.lambda_nm.unwrap(), "--lambda-nm")?;
+        return Ok(entries
+            .iter()
+            .map(|e| (e.name.clone(), transport::stack::from_skin(e, i)))
+            .collect());
+    }
+    match &a.stack {
+        Some(path) => Ok(vec![("baker".to_string(), read_stack(path)?)]),
+        None => Err(UsageError(
+            "give a STACK.json, --mci-in FILE.mci, or --spec SPEC --entry NAME --lambda-nm NM"
+                .into(),
+        )
+        .into()),
+    }
+}
+
+/// `--mci-in`: every run of an MCML input file, each written as .mco where
+/// [`mcml::resolve_output`] puts its name (in `-o DIR`, else the current directory).
+fn run_mci(a: &McArgs, o: &McOptions, path: &Path) -> anyhow::Result<()> {
+    let text = crate::files::read_text(path, crate::files::MAX_SPEC_BYTES, "an .mci file")
+        .map_err(|e| UsageError(e.to_string()))?;
+    let runs =
+        mcml::parse_mci(&text).map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
+    let outs = runs
+        .iter()
+        .enumerate()
+        .map(|(k, run)| match (&a.mco, runs.len()) {
+            (Some(p), 1) => Ok(p.clone()),
+            (Some(p), _) => Ok(p.with_extension(format!("{k}.mco"))),
+            (None, _) => mcml::resolve_output(&run.output_file, a.out.as_deref()),
+        })
+        .collect::<Result<Vec<PathBuf>, String>>()
+        .map_err(|e| UsageError(format!("{}: {e}", path.display())))?;
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    for (run, out) in runs.iter().zip(&outs) {
+        if run.threshold_weight != ROULETTE_WEIGHT && !a.json {
+            eprintln!(
+                "warning: {}: {}: threshold weight {} traced as {ROULETTE_WEIGHT} (roulette is \
+                 unbiased at any threshold; only the noise differs)",
+                path.display(),
+                run.output_file,
+                run.threshold_weight
+            );
+        }
+        let mut ok = o.clone();
+        if a.photons.is_none() {
+            ok.photons = run.photons; // the file's own photon count unless --photons is given
+        }
+        let hide = a.json || !a.progress.bar();
+        let (r, grid) = with_bar(&ok, hide, |o| mcml::simulate_grid(run, o))?;
+        report(&r, a.json)?;
+        if let Some(parent) = out.parent().filter(|_| a.out.is_some()) {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
+        write_mco(out, run, &r, &grid, a.progress.quiet)?;
+    }
+    Ok(())
+}
+
+fn write_mco(
+    out: &Path,
+    run: &mcml::McmlRun,
+    r: &McResult,
+    grid: &mcml::McmlGrid,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    atomic::write(out, mcml::write_mco(run, r, grid).as_bytes())
+        .with_context(|| format!("writing {}", out.display()))?;
+    if !quiet {
+        eprintln!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
+/// Runs `f` with a progress bar over `o.photons` on a terminal, unless `hide`.
 fn with_bar<T>(
     o: &McOptions,
-    json: bool,
+    hide: bool,
     f: impl FnOnce(&McOptions) -> anyhow::Result<T>,
 ) -> anyhow::Result<T> {
-    let bar = (!json).then(|| super::progress::bar(o.photons, "photons"));
+    let bar = (!hide).then(|| super::progress::bar(o.photons, "photons"));
     let mut with = o.clone();
     with.progress = super::progress::reporter(&bar);
     let r = f(&with);
@@ -160,6 +240,9 @@ fn report(r: &McResult, json: bool) -> anyhow::Result<()> {
     outln!("transmittance        Tt   {:.6} ± {:.6}", r.tt, r.tt_se)?;
     for (i, (a, s)) in r.absorbed.iter().zip(&r.absorbed_se).enumerate() {
         outln!("absorbed in layer {i:<2}      {a:.6} ± {s:.6}")?;
+    }
+    if let (Some(a), Some(s)) = (r.absorbed_total, r.absorbed_total_se) {
+        outln!("absorbed in all layers A  {a:.6} ± {s:.6}")?;
     }
     outln!("∫Rd(r) over the grid      {:.6}", r.rd_r_integrated)?;
     outln!("energy balance            {:.6}", r.energy())?;

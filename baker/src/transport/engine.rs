@@ -616,11 +616,16 @@ impl Scorer for DirectScorer<'_> {
     }
     fn photon_done(&mut self) {
         self.t.photons += 1;
+        let mut total = 0.0;
         for (a, s) in self.absorbed.iter_mut().zip(self.t.absorbed.iter_mut()) {
             if *a != 0.0 {
+                total += *a;
                 s.add(*a);
                 *a = 0.0;
             }
+        }
+        if total != 0.0 {
+            self.t.absorbed_total.add(total);
         }
     }
 }

@@ -14,6 +14,8 @@ pub struct RadialTally {
     pub rd_unscattered: Sums,
     pub tt: Sums,
     pub absorbed: Vec<Sums>,
+    /// Absorbed in all layers together, per photon (its Σx² gives the total's own SE).
+    pub absorbed_total: Sums,
     pub rd_r: Vec<Sums>,
     /// Weight of photons stopped after too many boundary hits without interacting.
     pub lost: Sums,
@@ -28,6 +30,7 @@ impl RadialTally {
             rd_unscattered: Sums::default(),
             tt: Sums::default(),
             absorbed: vec![Sums::default(); layers],
+            absorbed_total: Sums::default(),
             rd_r: vec![Sums::default(); nr],
             lost: Sums::default(),
             scattering_events: 0,
@@ -42,6 +45,7 @@ impl RadialTally {
         for (a, b) in self.absorbed.iter_mut().zip(&o.absorbed) {
             a.merge(b);
         }
+        self.absorbed_total.merge(&o.absorbed_total);
         for (a, b) in self.rd_r.iter_mut().zip(&o.rd_r) {
             a.merge(b);
         }
@@ -64,6 +68,13 @@ pub struct McResult {
     pub tt_se: f64,
     pub absorbed: Vec<f64>,
     pub absorbed_se: Vec<f64>,
+    /// Absorbed in all layers (MCML's A), with its standard error from per-photon sums (not
+    /// the per-layer SEs in quadrature: one photon's absorptions in different layers are
+    /// correlated). Absent where absorption is not resolved (white runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub absorbed_total: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub absorbed_total_se: Option<f64>,
     pub r_mm: Vec<f64>,
     pub rd_r_per_mm2: Vec<f64>,
     pub rd_r_per_mm2_se: Vec<f64>,
@@ -101,6 +112,8 @@ impl McResult {
             tt_se: t.tt.se(n),
             absorbed: t.absorbed.iter().map(|s| s.mean(n)).collect(),
             absorbed_se: t.absorbed.iter().map(|s| s.se(n)).collect(),
+            absorbed_total: (!t.absorbed.is_empty()).then(|| t.absorbed_total.mean(n)),
+            absorbed_total_se: (!t.absorbed.is_empty()).then(|| t.absorbed_total.se(n)),
             r_mm: (0..t.rd_r.len())
                 .map(|i| (i as f64 + 0.5) * dr_mm)
                 .collect(),

@@ -1,10 +1,17 @@
-//! MCML input files (`.mci`, format version 1.0): the runs they describe, converted to mm.
+//! MCML input files (`.mci`): what both formats share. The run they describe (converted to
+//! mm), the data-line reader, number and count parsing, the bounds, and where a run's output
+//! file goes. [`super::mci1`] reads MCML 1.x files (`1.0`), [`super::mci2`] MCML 2.0 files
+//! (`mcmli2.0`); [`super::parse_mci`] picks by the version line.
 
-use crate::transport::stack::{Layer, RadialGrid, Stack, MAX_LAYERS};
+use std::path::{Component, Path, PathBuf};
+
+use crate::transport::engine::ROULETTE_WEIGHT;
+use crate::transport::stack::Stack;
 
 /// One run of an `.mci` file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct McmlRun {
+    /// The output file name as the file gives it: a relative path (see [`resolve_output`]).
     pub output_file: String,
     pub photons: u64,
     pub dz_cm: f64,
@@ -12,6 +19,10 @@ pub struct McmlRun {
     pub nz: usize,
     pub nr: usize,
     pub na: usize,
+    /// MCML 2.0's roulette threshold weight (MCML 1.x: its constant WEIGHT, 1e-4). The engine
+    /// plays roulette at [`ROULETTE_WEIGHT`]; roulette is unbiased at any threshold, so a
+    /// different value changes the noise, not the expected answers.
+    pub threshold_weight: f64,
     /// The layers, converted to mm; `grid` is the radial grid of the run.
     pub stack: Stack,
 }
@@ -36,6 +47,7 @@ impl McmlRun {
             nz: ((depth_mm / stack.grid.dr_mm).ceil() as usize).clamp(1, 1000),
             nr: stack.grid.nr,
             na: 30,
+            threshold_weight: ROULETTE_WEIGHT,
             stack: stack.clone(),
         }
     }
@@ -45,17 +57,21 @@ impl McmlRun {
 /// (128 MiB of f64 each), far above MCML's examples (nz·nr = 40,000).
 pub const MAX_GRID_CELLS: usize = 1 << 24;
 
-/// The data lines of an MCML file, in order: blank lines and `#` comments skipped, `\r`
-/// treated as blank, text after the values ignored (MCML's FindDataLine).
-struct DataLines<'a> {
-    lines: std::vec::IntoIter<(usize, &'a str)>,
+/// Most runs one .mci file may hold (MCML 2.0 counts them in a `short`).
+pub const MAX_RUNS: usize = 1000;
+
+/// The data lines of an MCML file, in order: blank lines and `#` comment lines skipped
+/// (MCML's CommentLineQ: only spaces or tabs before `#` or the end of the line), `\r` treated
+/// as blank, text after the values ignored (MCML's FindDataLine).
+pub(super) struct DataLines<'a> {
+    lines: std::iter::Peekable<std::vec::IntoIter<Line<'a>>>,
 }
 
 /// A data line: its 1-based line number in the file and its text.
-type Line<'a> = (usize, &'a str);
+pub(super) type Line<'a> = (usize, &'a str);
 
 impl<'a> DataLines<'a> {
-    fn new(text: &'a str) -> Self {
+    pub(super) fn new(text: &'a str) -> Self {
         let lines: Vec<Line<'a>> = text
             .lines()
             .enumerate()
@@ -63,26 +79,31 @@ impl<'a> DataLines<'a> {
             .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'))
             .collect();
         Self {
-            lines: lines.into_iter(),
+            lines: lines.into_iter().peekable(),
         }
     }
 
     /// The next data line, which holds `what`.
-    fn next(&mut self, what: &str) -> Result<Line<'a>, String> {
+    pub(super) fn next(&mut self, what: &str) -> Result<Line<'a>, String> {
         self.lines
             .next()
             .ok_or_else(|| format!("file ends before the {what}"))
     }
 
+    /// The next data line without taking it.
+    pub(super) fn peek(&mut self) -> Option<Line<'a>> {
+        self.lines.peek().copied()
+    }
+
     /// The first number of the next data line, a count (`what`).
-    fn count(&mut self, what: &str) -> Result<usize, String> {
+    pub(super) fn count(&mut self, what: &str) -> Result<usize, String> {
         let l = self.next(what)?;
         count(nums(l, 1, &format!("the {what}"))?[0], l.0, what)
     }
 }
 
 /// The first `n` numbers of a data line (`what` names them in messages).
-fn nums((line, l): Line<'_>, n: usize, what: &str) -> Result<Vec<f64>, String> {
+pub(super) fn nums((line, l): Line<'_>, n: usize, what: &str) -> Result<Vec<f64>, String> {
     let v: Vec<f64> = l
         .split_whitespace()
         .take(n)
@@ -97,163 +118,69 @@ fn nums((line, l): Line<'_>, n: usize, what: &str) -> Result<Vec<f64>, String> {
     Ok(v)
 }
 
-/// `v` as a positive whole number.
-fn count(v: f64, line: usize, what: &str) -> Result<usize, String> {
+/// `v` as a positive whole number (at most 10¹⁵).
+pub(super) fn count(v: f64, line: usize, what: &str) -> Result<usize, String> {
     if v >= 1.0 && v.fract() == 0.0 && v <= 1e15 {
         Ok(v as usize)
     } else {
         Err(format!(
-            "line {line}: {what} must be a positive whole number, found {v}"
+            "line {line}: {what} must be a positive whole number (1 to 1e15), found {v}"
         ))
     }
 }
 
-/// Parses every run of an `.mci` file (format version 1.0).
-pub fn parse_mci(text: &str) -> Result<Vec<McmlRun>, String> {
-    let mut lines = DataLines::new(text);
-    let _version = lines.next("file version")?;
-    let runs = lines.count("number of runs")?;
-    let mut out = Vec::new();
-    for _ in 0..runs {
-        let run = parse_run(&mut lines, out.len() + 1)?;
-        out.push(run);
-    }
-    Ok(out)
-}
-
-/// Run number `index` (1-based): output file, photons, grid, layers.
-fn parse_run(lines: &mut DataLines<'_>, index: usize) -> Result<McmlRun, String> {
-    let output_file = output_file_name(lines.next("output file name")?)?;
-    let photons = lines.count("number of photons")? as u64;
-    let l = lines.next("dz, dr")?;
-    let d = nums(l, 2, "dz dr [cm]")?;
-    if !(d[0] > 0.0 && d[1] > 0.0) {
-        return Err(format!("line {}: dz and dr must be > 0", l.0));
-    }
-    let (nz, nr, na) = grid_counts(lines.next("nz, nr, na")?)?;
-    let (n_above, layers, n_below) = parse_layers(lines)?;
-    let stack = Stack {
-        n_above,
-        n_below,
-        layers,
-        junction: None,
-        grid: RadialGrid {
-            dr_mm: d[1] * 10.0,
-            nr,
-        },
-    };
-    stack.validate().map_err(|e| format!("run {index}: {e}"))?;
-    Ok(McmlRun {
-        output_file,
-        photons,
-        dz_cm: d[0],
-        dr_cm: d[1],
-        nz,
-        nr,
-        na,
-        stack,
-    })
-}
-
-/// The output file name of a run: a plain name, never a path that leads elsewhere (it is
-/// written next to the .mci file).
-fn output_file_name((line, l): Line<'_>) -> Result<String, String> {
-    let output_file = l
-        .split_whitespace()
-        .next()
-        .ok_or(format!("line {line}: missing output file name"))?
-        .to_string();
-    if output_file == "."
-        || output_file == ".."
-        || output_file.contains(['/', '\\', '\0'])
-        || output_file.chars().any(char::is_control)
-    {
-        return Err(format!(
-            "line {line}: output file {output_file:?} must be a plain file name (it is \
-             written next to the .mci file)"
-        ));
-    }
-    Ok(output_file)
-}
-
-/// nz, nr, na, bounded by [`MAX_GRID_CELLS`] before the A(r, z) and Rd(r, α) grids are
-/// allocated from them.
-fn grid_counts(l: Line<'_>) -> Result<(usize, usize, usize), String> {
-    let g = nums(l, 3, "nz nr na")?;
-    let (nz, nr, na) = (
-        count(g[0], l.0, "nz")?,
-        count(g[1], l.0, "nr")?,
-        count(g[2], l.0, "na")?,
-    );
+/// nz, nr, na of line `line`, bounded by [`MAX_GRID_CELLS`] before the A(r, z) and Rd(r, α)
+/// grids are allocated from them.
+pub(super) fn check_grid(line: usize, nz: usize, nr: usize, na: usize) -> Result<(), String> {
     if nz.saturating_mul(nr) > MAX_GRID_CELLS || nr.saturating_mul(na) > MAX_GRID_CELLS {
         return Err(format!(
-            "line {}: nz × nr = {} or nr × na = {} is over {MAX_GRID_CELLS} grid cells",
-            l.0,
+            "line {line}: nz × nr = {} or nr × na = {} is over {MAX_GRID_CELLS} grid cells",
             nz.saturating_mul(nr),
             nr.saturating_mul(na)
         ));
     }
-    Ok((nz, nr, na))
+    Ok(())
 }
 
-/// The layer block: number of layers, n above, one `n mua mus g d` line per layer (cm,
-/// converted to mm), n below.
-fn parse_layers(lines: &mut DataLines<'_>) -> Result<(f64, Vec<Layer>, f64), String> {
-    let l = lines.next("number of layers")?;
-    let nl = count(
-        nums(l, 1, "the number of layers")?[0],
-        l.0,
-        "number of layers",
-    )?;
-    if nl > MAX_LAYERS {
+/// The output file name of a run (the first word of the line), checked by
+/// [`check_output_name`].
+pub(super) fn output_file_name((line, l): Line<'_>) -> Result<String, String> {
+    let name = l
+        .split_whitespace()
+        .next()
+        .ok_or(format!("line {line}: missing output file name"))?;
+    check_output_name(name).map_err(|e| format!("line {line}: {e}"))?;
+    Ok(name.to_string())
+}
+
+/// An output file name must be a relative path that stays where it is resolved
+/// ([`resolve_output`]): no root, no `..`, no `\` (a Windows separator here would be part of
+/// a file name), no control characters, and a file name at its end.
+pub fn check_output_name(name: &str) -> Result<(), String> {
+    let p = Path::new(name);
+    let bad_char = name.contains('\\') || name.chars().any(char::is_control);
+    let escapes = p
+        .components()
+        .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir));
+    let ends_in_name =
+        matches!(p.components().next_back(), Some(Component::Normal(_))) && !name.ends_with('/');
+    if bad_char || escapes || !ends_in_name {
         return Err(format!(
-            "line {}: at most {MAX_LAYERS} layers are supported",
-            l.0
+            "output file {name:?} must be a relative file path inside the output folder (the \
+             current directory, or -o DIR): no leading /, no .., no \\ or control characters"
         ));
     }
-    let n_above = nums(lines.next("n of the medium above")?, 1, "n above")?[0];
-    let mut layers = Vec::new();
-    for i in 0..nl {
-        let l = lines.next("layer line")?;
-        let v = nums(l, 5, "a layer (n mua mus g d)")?;
-        layers.push(Layer {
-            name: format!("layer {}", i + 1),
-            d_mm: v[4] * 10.0,
-            eta: v[0],
-            mua_per_mm: v[1] / 10.0,
-            mus_per_mm: v[2] / 10.0,
-            g: v[3],
-        });
-    }
-    let n_below = nums(lines.next("n of the medium below")?, 1, "n below")?[0];
-    Ok((n_above, layers, n_below))
+    Ok(())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn parses_mcml_template_with_two_runs() {
-        let mci = "1.0 # file version\n2 # runs\n\ntemp1.mco A\n10\n20E-4 20E-4\n10 20 30\n2\n# n mua mus g d\n1.0\n1.3 20 200 0.70 0.01\n1.4 10 200 0.90 1.0E+8\n1.0\n\
-                   temp2.mco\t A\r\n100\n0.01 0.01\n5 5 5\n1\n1.0\n1.37 1 100 0.9 0.1\n1.0\n";
-        let runs = parse_mci(mci).unwrap();
-        assert_eq!(runs.len(), 2);
-        assert_eq!(runs[0].output_file, "temp1.mco");
-        assert_eq!(runs[0].photons, 10);
-        assert_eq!((runs[0].nz, runs[0].nr, runs[0].na), (10, 20, 30));
-        let l = &runs[0].stack.layers[0];
-        assert!(
-            (l.d_mm - 0.1).abs() < 1e-12
-                && (l.mua_per_mm - 2.0).abs() < 1e-12
-                && (l.mus_per_mm - 20.0).abs() < 1e-12
-        );
-        assert_eq!(runs[1].stack.layers.len(), 1);
-    }
-
-    #[test]
-    fn reports_the_line_of_a_bad_value() {
-        let e = parse_mci("1.0\n1\nout.mco A\nmany\n").unwrap_err();
-        assert!(e.contains("line 4"), "{e}");
-    }
+/// Where a run's output file `name` (from the .mci file) is written. As MCML does, the name
+/// is relative to the current directory; with `-o DIR` (`out_dir`) it is relative to DIR
+/// instead. Either way nothing is written outside that folder: names that would leave it
+/// (absolute paths, `..`) are refused.
+pub fn resolve_output(name: &str, out_dir: Option<&Path>) -> Result<PathBuf, String> {
+    check_output_name(name)?;
+    Ok(match out_dir {
+        Some(d) => d.join(name),
+        None => PathBuf::from(name),
+    })
 }
