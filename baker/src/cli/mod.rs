@@ -27,6 +27,7 @@ mod observer;
 mod optics;
 mod plan;
 mod progress;
+mod schema;
 mod slurm;
 mod validate;
 
@@ -79,6 +80,8 @@ pub enum Command {
     /// Manage the work-unit cache.
     #[command(subcommand)]
     Cache(cache::CacheCommand),
+    /// Print the JSON Schema (draft 2020-12) of a spec kind, for editors and checkers.
+    Schema(schema::SchemaArgs),
 }
 
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -94,5 +97,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Plan(p) => plan::run(p),
         Command::Cache(c) => cache::run(c),
         Command::Slurm(a) => slurm::run(a),
+        Command::Schema(a) => schema::run(a),
     }
 }
