@@ -12,8 +12,8 @@ use crate::spec::SpecKind;
 pub struct InitArgs {
     /// Kind of spec: skin (ch. 3: people's skin → diffusion profiles) or fiber (ch. 5: cloth
     /// fibers → BCSDF tables).
-    #[arg(value_parser = ["skin", "fiber"])]
-    pub kind: String,
+    #[arg(value_enum)]
+    pub kind: super::schema::Kind,
     /// Where to write it (default: skin.yaml or fiber.yaml in the current directory; `-` for
     /// standard output). Its file name becomes the bake's output folder name.
     #[arg(short = 'o', long = "out", value_name = "FILE")]
@@ -27,14 +27,13 @@ pub struct InitArgs {
 }
 
 pub fn run(a: InitArgs) -> anyhow::Result<()> {
-    let kind = if a.kind == "skin" {
-        SpecKind::Skin
-    } else {
-        SpecKind::Fiber
-    };
-    let path = a
-        .out
-        .unwrap_or_else(|| PathBuf::from(format!("{}.yaml", a.kind)));
+    let kind = a.kind.spec_kind();
+    let path = a.out.unwrap_or_else(|| {
+        PathBuf::from(match kind {
+            SpecKind::Skin => "skin.yaml",
+            SpecKind::Fiber => "fiber.yaml",
+        })
+    });
     if path.as_os_str() != "-" && path.exists() && !a.force {
         return Err(UsageError(format!(
             "{} exists; choose another name with -o FILE, or replace it with --force",

@@ -30,6 +30,7 @@ mod observer;
 mod optics;
 mod plan;
 mod progress;
+mod schema;
 mod shell;
 mod slurm;
 mod validate;
@@ -85,6 +86,8 @@ pub enum Command {
     Completions(shell::CompletionsArgs),
     /// Manual pages (roff): baker.1 on standard output, or every command's page into a folder.
     Man(shell::ManArgs),
+    /// Print the JSON Schema (draft 2020-12) of a spec kind, for editors and checkers.
+    Schema(schema::SchemaArgs),
 }
 
 /// A command's text result to standard output, or atomically to `out` (announced unless
@@ -121,5 +124,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Init(a) => init::run(a),
         Command::Completions(a) => shell::completions(a),
         Command::Man(a) => shell::man(a),
+        Command::Schema(a) => schema::run(a),
     }
 }

@@ -14,6 +14,44 @@ pub(super) struct Ctx {
     pub(super) errors: Vec<SpecError>,
 }
 
+/// The range a number of a spec must lie in, as the resolver checks it and the JSON Schema
+/// states it ([`super::schema`]): [lo, hi], or (lo, hi] with `open_lo`; `whole`: a count.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    pub lo: f64,
+    pub hi: f64,
+    pub open_lo: bool,
+    pub whole: bool,
+}
+
+impl Bounds {
+    /// [lo, hi].
+    pub const fn closed(lo: f64, hi: f64) -> Bounds {
+        Bounds {
+            lo,
+            hi,
+            open_lo: false,
+            whole: false,
+        }
+    }
+
+    /// (lo, hi]: the lower bound excluded.
+    pub const fn above(lo: f64, hi: f64) -> Bounds {
+        Bounds {
+            open_lo: true,
+            ..Bounds::closed(lo, hi)
+        }
+    }
+
+    /// A whole number in [lo, hi].
+    pub const fn whole(lo: f64, hi: f64) -> Bounds {
+        Bounds {
+            whole: true,
+            ..Bounds::closed(lo, hi)
+        }
+    }
+}
+
 /// Line and column of a value.
 pub(super) fn loc<T>(s: &Spanned<T>) -> (u64, u64) {
     (s.referenced.line(), s.referenced.column())
@@ -162,6 +200,22 @@ impl Ctx {
             self.out_of_range(loc(v), field, num(x), allowed);
             None
         }
+    }
+
+    /// [`Ctx::in_range`] within `b`.
+    pub(super) fn in_bounds(&mut self, field: &str, v: &Spanned<f64>, b: Bounds) -> Option<f64> {
+        self.in_range(field, v, b.lo, b.hi, b.open_lo)
+    }
+
+    /// [`Ctx::opt_range`] within `b`.
+    pub(super) fn opt_bounds(
+        &mut self,
+        field: &str,
+        v: &Option<Spanned<f64>>,
+        b: Bounds,
+        default: f64,
+    ) -> f64 {
+        self.opt_range(field, v, b.lo, b.hi, b.open_lo, default)
     }
 
     /// [`Ctx::in_range`] of an optional value; `default` when it is absent or out of range.

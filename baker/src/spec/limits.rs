@@ -26,7 +26,7 @@
 //! The process's own address-space limit (`ulimit -v`) is a limit too: a bake whose memory
 //! bound does not fit in 75 % of it is refused before it starts.
 
-use super::check::{count_text, num, Ctx};
+use super::check::{count_text, num, Bounds, Ctx};
 use super::yaml::Spanned;
 
 /// The limits of one spec (defaults, raised by its `limits:` block).
@@ -59,18 +59,52 @@ impl Default for Limits {
     }
 }
 
-/// `limits:` as written.
-#[derive(Debug, serde::Deserialize, Default)]
+/// What each limit may be set to: a count from 1 (a real number for photons and sizes in GiB),
+/// each with a ceiling of its own so that no limit can make a size overflow the arithmetic that
+/// checks it.
+pub(super) const LIMIT_BOUNDS: [(&str, Bounds); 9] = [
+    ("wavelengths", Bounds::whole(1.0, 1e6)),
+    ("radial_bins", Bounds::whole(1.0, 1e6)),
+    ("entries", Bounds::whole(1.0, 1e7)),
+    ("photons", Bounds::closed(1.0, 1e18)),
+    ("variants", Bounds::whole(1.0, 1e6)),
+    ("table_gib", Bounds::above(0.0, 1e6)),
+    ("mask_pixels", Bounds::whole(1.0, 1e10)),
+    ("polygon_vertices", Bounds::whole(1.0, 1e8)),
+    ("memory_gib", Bounds::above(0.0, 1e6)),
+];
+
+/// The bounds of limit `name` ([`LIMIT_BOUNDS`]).
+fn limit_bounds(name: &str) -> Bounds {
+    LIMIT_BOUNDS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, b)| *b)
+        .expect("every limit is in LIMIT_BOUNDS")
+}
+
+/// `limits:` as written: resource budgets, each raising (or lowering) a default.
+#[derive(Debug, serde::Deserialize, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawLimits {
+    /// Wavelengths of a skin spec or of a fiber bake's spectrum (471 by default).
     pub wavelengths: Option<Spanned<f64>>,
+    /// Radial bins of the skin profiles (4096 by default).
     pub radial_bins: Option<Spanned<f64>>,
+    /// Entries of a skin spec, sweeps expanded; cross-sections of a fiber spec (10,000 by
+    /// default).
     pub entries: Option<Spanned<f64>>,
+    /// Photon packets a bake traces (1e11 by default).
     pub photons: Option<Spanned<f64>>,
+    /// Dyeings of one fiber entry (1024 by default).
     pub variants: Option<Spanned<f64>>,
+    /// One fiber entry's tables, uncompressed f32, GiB (8 by default).
     pub table_gib: Option<Spanned<f64>>,
+    /// Pixels of a mask image (4096² by default).
     pub mask_pixels: Option<Spanned<f64>>,
+    /// Vertices of a polygon section (100,000 by default).
     pub polygon_vertices: Option<Spanned<f64>>,
+    /// The bake's memory bound, GiB (16 by default).
     pub memory_gib: Option<Spanned<f64>>,
 }
 
@@ -89,55 +123,31 @@ impl Ctx {
         let Some(raw) = raw else { return l };
         let r = &raw.value;
         let whole = [
+            ("wavelengths", &r.wavelengths, &mut l.wavelengths),
+            ("radial_bins", &r.radial_bins, &mut l.radial_bins),
+            ("entries", &r.entries, &mut l.entries),
+            ("variants", &r.variants, &mut l.variants),
+            ("mask_pixels", &r.mask_pixels, &mut l.mask_pixels),
             (
-                "limits.wavelengths",
-                &r.wavelengths,
-                1e6,
-                &mut l.wavelengths,
-            ),
-            (
-                "limits.radial_bins",
-                &r.radial_bins,
-                1e6,
-                &mut l.radial_bins,
-            ),
-            ("limits.entries", &r.entries, 1e7, &mut l.entries),
-            ("limits.variants", &r.variants, 1e6, &mut l.variants),
-            (
-                "limits.mask_pixels",
-                &r.mask_pixels,
-                1e10,
-                &mut l.mask_pixels,
-            ),
-            (
-                "limits.polygon_vertices",
+                "polygon_vertices",
                 &r.polygon_vertices,
-                1e8,
                 &mut l.polygon_vertices,
             ),
         ];
-        for (field, v, hi, out) in whole {
-            if let Some(n) = self.whole(field, v, 1.0, hi) {
+        for (name, v, out) in whole {
+            let b = limit_bounds(name);
+            if let Some(n) = self.whole(&format!("limits.{name}"), v, b.lo, b.hi) {
                 *out = n;
             }
         }
-        l.photons = self.opt_range("limits.photons", &r.photons, 1.0, 1e18, false, l.photons);
-        l.table_gib = self.opt_range(
-            "limits.table_gib",
-            &r.table_gib,
-            0.0,
-            1e6,
-            true,
-            l.table_gib,
-        );
-        l.memory_gib = self.opt_range(
-            "limits.memory_gib",
-            &r.memory_gib,
-            0.0,
-            1e6,
-            true,
-            l.memory_gib,
-        );
+        let real = [
+            ("photons", &r.photons, &mut l.photons),
+            ("table_gib", &r.table_gib, &mut l.table_gib),
+            ("memory_gib", &r.memory_gib, &mut l.memory_gib),
+        ];
+        for (name, v, out) in real {
+            *out = self.opt_bounds(&format!("limits.{name}"), v, limit_bounds(name), *out);
+        }
         l
     }
 

@@ -17,6 +17,7 @@ pub mod fiber;
 pub mod kind;
 pub mod limits;
 pub mod names;
+pub mod schema;
 pub mod skin;
 mod syntax;
 pub mod templates;

@@ -12,13 +12,59 @@
 //! error in place of the kind's message. (A spec with an error is parsed more times still:
 //! probed copies find what the field allows.)
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 
 use serde::de::IgnoredAny;
-pub use serde_saphyr::Spanned;
+use serde::{Deserialize, Deserializer};
+use serde_saphyr::Location;
 
 use super::error::{SpecError, SpecErrors};
 use super::syntax;
+
+/// A value with where the spec gives it: serde-saphyr's `Spanned`, which it deserializes
+/// through (so locations and messages are serde-saphyr's), in a type of the baker's own so that
+/// it can describe itself in a JSON Schema ([`super::schema`]): as its value, the location
+/// being no part of what a user writes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Spanned<T> {
+    pub value: T,
+    pub referenced: Location,
+    pub defined: Location,
+}
+
+impl<T> Spanned<T> {
+    pub const fn new(value: T, referenced: Location, defined: Location) -> Self {
+        Spanned {
+            value,
+            referenced,
+            defined,
+        }
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Spanned<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        serde_saphyr::Spanned::<T>::deserialize(d)
+            .map(|s| Spanned::new(s.value, s.referenced, s.defined))
+    }
+}
+
+/// The schema of the value alone (same name and id, so a spanned struct is one definition).
+impl<T: schemars::JsonSchema> schemars::JsonSchema for Spanned<T> {
+    fn inline_schema() -> bool {
+        T::inline_schema()
+    }
+    fn schema_name() -> Cow<'static, str> {
+        T::schema_name()
+    }
+    fn schema_id() -> Cow<'static, str> {
+        T::schema_id()
+    }
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        T::json_schema(g)
+    }
+}
 
 /// How specs are parsed: serde-saphyr's budgets (nodes, aliases, depth: an alias bomb or a
 /// deeply nested document is an error, not an exhausted machine), and explicit tags it does

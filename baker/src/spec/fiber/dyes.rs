@@ -6,8 +6,15 @@ use std::path::Path;
 use super::raw::{RawBand, RawDye};
 use super::FiberCx;
 use crate::fiber::dye::{self, Band, Dye, DyeClass, Spectrum};
-use crate::spec::check::loc;
+use crate::spec::check::{loc, Bounds};
 use crate::spec::yaml::Spanned;
+
+/// `bands.peak_nm`: wavelength of a band's peak, nm.
+pub(in crate::spec) const PEAK_NM: Bounds = Bounds::closed(300.0, 800.0);
+/// `bands.fwhm_nm`: full width at half maximum, nm.
+pub(in crate::spec) const FWHM_NM: Bounds = Bounds::closed(1.0, 500.0);
+/// `bands.peak_eps_l_per_mg_cm`: extinction at the peak, l mg⁻¹ cm⁻¹.
+pub(in crate::spec) const PEAK_EPS: Bounds = Bounds::above(0.0, 1.0);
 
 impl FiberCx {
     /// The presets and the spec's dyes, and the names of the spec's dyes that failed their
@@ -88,14 +95,12 @@ impl FiberCx {
         let mut bands = Vec::new();
         for rb in &b.value {
             let r = &rb.value;
-            let peak = self.in_range("dyes.bands.peak_nm", &r.peak_nm, 300.0, 800.0, false);
-            let fwhm = self.in_range("dyes.bands.fwhm_nm", &r.fwhm_nm, 1.0, 500.0, false);
-            let eps = self.in_range(
+            let peak = self.in_bounds("dyes.bands.peak_nm", &r.peak_nm, PEAK_NM);
+            let fwhm = self.in_bounds("dyes.bands.fwhm_nm", &r.fwhm_nm, FWHM_NM);
+            let eps = self.in_bounds(
                 "dyes.bands.peak_eps_l_per_mg_cm",
                 &r.peak_eps_l_per_mg_cm,
-                0.0,
-                1.0,
-                true,
+                PEAK_EPS,
             );
             bands.push(Band {
                 peak_nm: peak?,

@@ -13,6 +13,7 @@ mod files;
 mod population;
 pub mod raw;
 mod resolve;
+mod schema;
 mod section;
 mod settings;
 mod surface;
@@ -30,6 +31,7 @@ use crate::fiber::slices::BakeSettings;
 use crate::fiber::Section;
 pub use entry::{FiberEntry, SectionSource, SymmetryMode};
 use raw::RawFiberSpec;
+pub(super) use schema::refine as refine_schema;
 pub use section::MEASURED_SIZE_FACTOR;
 pub use surface::MAX_BETA_DEG;
 

@@ -1,118 +1,184 @@
 //! The fiber spec as written: serde structs that keep the location of every value and reject
 //! unknown fields. Ranges and meaning are checked by the resolver ([`super`]).
 
+use schemars::JsonSchema;
 use serde::Deserialize;
 
 use crate::spec::yaml::Spanned;
 
-#[derive(Debug, Deserialize, Default)]
+/// A fiber spec (thesis ch. 5): dyes and fibers, for fiber BCSDF tables.
+#[derive(Debug, Deserialize, Default, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawFiberSpec {
+    /// Spec format version; 1 today.
     pub version: Option<Spanned<u32>>,
+    /// Dyes besides the shipped presets, each under a new name.
     #[serde(default)]
     pub dyes: Vec<Spanned<RawDye>>,
+    /// The fibers to bake.
     #[serde(default)]
     pub fibers: Vec<Spanned<RawFiber>>,
+    /// How `baker bake` tabulates the BCSDFs (all optional).
     pub bake: Option<Spanned<RawBake>>,
-    /// Resource budgets ([`crate::spec::limits`]).
+    /// Resource budgets: what the spec may ask for before the baker allocates it (raise one
+    /// deliberately for a larger bake; README "Hostile input").
     pub limits: Option<Spanned<crate::spec::limits::RawLimits>>,
 }
 
 /// `bake:` — how `baker bake` tabulates the BCSDFs (all optional).
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawBake {
+    /// Angular bin width, degrees: a divisor of 180 (1, 2, 3, 5, 6, 10 …).
     pub resolution_deg: Option<Spanned<f64>>,
+    /// Photons traced per stored incoming bin (a whole number).
     pub photons_per_direction: Option<Spanned<f64>>,
+    /// Random seed (a whole number).
     pub seed: Option<Spanned<f64>>,
+    /// Draws per boundary event of the main path (a whole number; 1 = plain tracing).
     pub split: Option<Spanned<f64>>,
+    /// Precision of the stored tables.
     pub precision: Option<Spanned<String>>,
+    /// Mantissa bits kept (bit rounding; a whole number up to the precision's: 10 for f16, 23
+    /// for f32; all by default).
     pub keep_bits: Option<Spanned<f64>>,
+    /// Channels of the tables: linear sRGB (D65), or one per wavelength.
     pub channels: Option<Spanned<String>>,
+    /// The spectrum traced, nm.
     pub lambda_nm: Option<Spanned<RawLambda>>,
 }
 
-#[derive(Debug, Deserialize)]
+/// `lambda_nm: {start, end, step}`.
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawLambda {
+    /// First wavelength, nm.
     pub start: Spanned<f64>,
+    /// Last wavelength, nm (not below `start`).
     pub end: Spanned<f64>,
+    /// Step, nm.
     pub step: Spanned<f64>,
 }
 
 /// `sweep:` — every dye × every depth of shade, from the same trace.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawSweep {
+    /// Dyes to bake, each once (presets or the spec's `dyes`).
     pub dyes: Spanned<Vec<Spanned<String>>>,
+    /// Depths of shade ζ, percent of the fiber's weight, each once.
     pub depth_of_shade_percent: Spanned<Vec<Spanned<f64>>>,
+    /// Also bake the undyed fiber (first).
     pub undyed: Option<Spanned<bool>>,
 }
 
 /// `{name, class, bands: [{peak_nm, fwhm_nm, peak_eps_l_per_mg_cm}]}` or `{name, class, csv}`.
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawDye {
+    /// Name fibers use it by (not a preset's name).
     pub name: Spanned<String>,
+    /// Dye class, whose peak extinction range the dye must have (§5.3.1).
     pub class: Spanned<String>,
+    /// Gaussian absorption bands (at least one); or give `csv`.
     pub bands: Option<Spanned<Vec<Spanned<RawBand>>>>,
+    /// A CSV of lambda_nm,eps_l_per_mg_cm rows (relative to the spec's folder); or give
+    /// `bands`.
     pub csv: Option<Spanned<String>>,
+    /// Where the spectrum comes from (recorded in the tables' provenance).
     pub source: Option<Spanned<String>>,
 }
 
-#[derive(Debug, Deserialize)]
+/// A Gaussian absorption band: ε(λ) = peak·exp(−4 ln 2 (λ − λp)²/FWHM²).
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawBand {
+    /// Wavelength of the peak λp, nm.
     pub peak_nm: Spanned<f64>,
+    /// Full width at half maximum, nm.
     pub fwhm_nm: Spanned<f64>,
+    /// Extinction at the peak, l mg⁻¹ cm⁻¹.
     pub peak_eps_l_per_mg_cm: Spanned<f64>,
 }
 
-#[derive(Debug, Deserialize)]
+/// One fiber to bake.
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawFiber {
+    /// Entry name (names the output files).
     pub name: Spanned<String>,
+    /// Fiber type of Table 9 (diameter, density, refractive index, roughness).
     #[serde(rename = "type")]
     pub kind: Spanned<String>,
+    /// Cross-section: the type's generated shape by default.
     pub section: Option<Spanned<RawSection>>,
+    /// Diameter, µm (drawn in the type's Table 9 range by default; a polygon or mask keeps its
+    /// measured size unless given).
     pub diameter_um: Option<Spanned<f64>>,
+    /// Seed of the generated section and drawn diameter (a whole number; 1 by default).
     pub seed: Option<Spanned<f64>>,
+    /// Which fiber of the seeded population (a whole number; 0 by default).
     pub variant: Option<Spanned<f64>>,
+    /// Refractive index η (the type's by default).
     pub eta: Option<Spanned<f64>>,
+    /// Beckmann slope angle β of the surface facets, degrees (the type's by default); or give
+    /// `roughness`.
     pub beta_deg: Option<Spanned<f64>>,
+    /// Surface roughness, for β = arctan(Ra/l) (§5.3.1); or give `beta_deg`.
     pub roughness: Option<Spanned<RawRoughness>>,
+    /// Dye (a preset or one of the spec's `dyes`), with `depth_of_shade_percent`.
     pub dye: Option<Spanned<String>>,
+    /// Depth of shade ζ of `dye`, percent of the fiber's weight (§5.3.1).
     pub depth_of_shade_percent: Option<Spanned<f64>>,
+    /// Cuticle scales (wool has them by default).
     pub cuticle: Option<Spanned<RawCuticle>>,
+    /// Seeded cross-sections baked into the table (a whole number; several need a generated
+    /// `shape`).
     pub sections: Option<Spanned<f64>>,
+    /// Every dye × every depth of shade, baked from the same trace; instead of `dye`.
     pub sweep: Option<Spanned<RawSweep>>,
+    /// `auto`: detect the section's symmetries; `none`: trace every incoming direction.
     pub symmetry: Option<Spanned<String>>,
 }
 
 /// Exactly one of `shape` (a generator, or `ellipse` with `ratio`), `polygon` (CSV) or `mask`
 /// (image, with `um_per_px`).
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawSection {
+    /// A generated section, or `ellipse` (with `ratio`).
     pub shape: Option<Spanned<String>>,
+    /// Minor/major axis ratio of `shape: ellipse`.
     pub ratio: Option<Spanned<f64>>,
+    /// A CSV outline of x_um,y_um rows (a blank line or `hole` starts a hole), relative to the
+    /// spec's folder.
     pub polygon: Option<Spanned<String>>,
+    /// A binary image (PNG) of the section, relative to the spec's folder; with `um_per_px`.
     pub mask: Option<Spanned<String>>,
+    /// Scale of `mask`, µm per pixel.
     pub um_per_px: Option<Spanned<f64>>,
+    /// Smoothing passes over the outline of `mask` (a whole number).
     pub smoothing_passes: Option<Spanned<f64>>,
 }
 
-#[derive(Debug, Deserialize)]
+/// Surface roughness (§5.3.1).
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawRoughness {
+    /// Arithmetic mean roughness Ra, nm.
     pub ra_nm: Spanned<f64>,
+    /// Correlation length l, nm (Ra/l at most tan 45° = 1).
     pub l_nm: Spanned<f64>,
 }
 
-#[derive(Debug, Deserialize)]
+/// Cuticle scales on the surface (wool's size and tilt by default).
+#[derive(Debug, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RawCuticle {
+    /// Whether the fiber has the scales (true by default).
     pub enabled: Option<Spanned<bool>>,
+    /// Length of a scale along the fiber, µm.
     pub length_um: Option<Spanned<f64>>,
+    /// Tilt of a scale, degrees.
     pub tilt_deg: Option<Spanned<f64>>,
 }

@@ -9,10 +9,22 @@ use super::{FiberCx, FiberSpec, Scope};
 use crate::fiber::material::{FiberType, TABLE_9};
 use crate::fiber::slices::BakeSettings;
 use crate::fiber::symmetry::Symmetry;
-use crate::spec::check::{count_text, duplicate_message, loc};
+use crate::spec::check::{count_text, duplicate_message, loc, Bounds};
 use crate::spec::limits::Limits;
 use crate::spec::names;
 use crate::spec::yaml::Spanned;
+
+/// `fibers.seed`: any whole number an f64 holds exactly (up to 2^53).
+pub(in crate::spec) const SEED: Bounds = Bounds::whole(0.0, 9_007_199_254_740_992.0);
+/// `fibers.variant`: which fiber of the seeded population.
+pub(in crate::spec) const VARIANT: Bounds = Bounds::whole(0.0, 1e6);
+/// `fibers.eta`: refractive index of the fiber.
+pub(in crate::spec) const ETA: Bounds = Bounds::above(1.0, 3.0);
+/// `fibers.sections`: seeded cross-sections baked into one table.
+pub(in crate::spec) const SECTIONS: Bounds = Bounds::whole(1.0, 64.0);
+/// `fibers.symmetry`.
+pub(in crate::spec) const SYMMETRY: [(&str, SymmetryMode); 2] =
+    [("auto", SymmetryMode::Auto), ("none", SymmetryMode::None)];
 
 impl FiberCx {
     pub(super) fn fiber_spec(&mut self, raw: RawFiberSpec, dir: &std::path::Path) -> FiberSpec {
@@ -73,7 +85,7 @@ impl FiberCx {
                 f.value
                     .sections
                     .as_ref()
-                    .map_or(1.0, |s| s.value.clamp(1.0, 64.0))
+                    .map_or(1.0, |s| s.value.clamp(SECTIONS.lo, SECTIONS.hi))
             })
             .sum();
         let within = sections <= limits.entries as f64;
@@ -107,17 +119,17 @@ impl FiberCx {
         let types: Vec<(&str, &'static FiberType)> = TABLE_9.iter().map(|t| (t.name, t)).collect();
         let ft: &'static FiberType = self.choice("fibers.type", &r.kind, &types)?;
         let seeds = Seeds {
-            seed: self.count("fibers.seed", &r.seed, 0.0, 2f64.powi(53), 1),
-            variant: self.count("fibers.variant", &r.variant, 0.0, 1e6, 0),
+            seed: self.count("fibers.seed", &r.seed, SEED.lo, SEED.hi, 1),
+            variant: self.count("fibers.variant", &r.variant, VARIANT.lo, VARIANT.hi, 0),
         };
         let diameter_um = self.diameter_um(r, ft, seeds)?;
-        let eta = self.opt_range("fibers.eta", &r.eta, 1.0, 3.0, true, ft.eta());
+        let eta = self.opt_bounds("fibers.eta", &r.eta, ETA, ft.eta());
         let beta_deg = self.beta_deg(r, ft)?;
         let (source, section) = self.sized_section(r, ft, seeds, diameter_um, sc)?;
         let diameter_um = section.mean_width_um();
         let cuticle = self.cuticle(r, ft);
         let dye = self.dye_of(r, sc)?;
-        let sections = self.count("fibers.sections", &r.sections, 1.0, 64.0, 1);
+        let sections = self.count("fibers.sections", &r.sections, SECTIONS.lo, SECTIONS.hi, 1);
         if sections > 1 && !matches!(source, SectionSource::Generator { .. }) {
             self.invalid(
                 loc(r.sections.as_ref().unwrap()),
@@ -134,11 +146,7 @@ impl FiberCx {
         // use) is its first dyed variant.
         let dye = dye.or_else(|| variants.iter().flatten().next().cloned());
         let symmetry = match &r.symmetry {
-            Some(sy) => self.choice(
-                "fibers.symmetry",
-                sy,
-                &[("auto", SymmetryMode::Auto), ("none", SymmetryMode::None)],
-            )?,
+            Some(sy) => self.choice("fibers.symmetry", sy, &SYMMETRY)?,
             None => SymmetryMode::Auto,
         };
         let mut e = FiberEntry {

@@ -12,13 +12,25 @@ use crate::fiber::material::FiberType;
 use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
 use crate::fiber::Section;
-use crate::spec::check::loc;
+use crate::spec::check::{loc, Bounds};
 use crate::spec::yaml::Spanned;
 
 /// A measured (polygon or mask) section must be within this factor of its type's Table 9
 /// diameter range: real fibers vary (Table 9 gives one value for polyester), unit mistakes are
 /// factors of 1000 (mm for µm) or ~25 (a wrong `um_per_px`).
 pub const MEASURED_SIZE_FACTOR: f64 = 2.0;
+
+/// `fibers.diameter_um`, µm.
+pub(in crate::spec) const DIAMETER_UM: Bounds = Bounds::closed(1.0, 200.0);
+/// `section.ratio` of an ellipse, minor/major axis.
+pub(in crate::spec) const RATIO: Bounds = Bounds::closed(0.05, 1.0);
+/// `section.um_per_px` of a mask, µm per pixel.
+pub(in crate::spec) const UM_PER_PX: Bounds = Bounds::above(0.0, 100.0);
+/// `section.smoothing_passes` of a mask outline.
+pub(in crate::spec) const SMOOTHING_PASSES: Bounds = Bounds::closed(0.0, 100.0);
+/// `section.shape` of an ellipse (with `ratio`); the other shapes are generators
+/// ([`Shape::ALL`]).
+pub(in crate::spec) const ELLIPSE: &str = "ellipse";
 
 /// What a generated section (and a drawn diameter) is drawn from: `fibers.seed` and
 /// `fibers.variant`.
@@ -45,7 +57,7 @@ impl FiberCx {
     pub(super) fn diameter_um(&mut self, r: &RawFiber, ft: &FiberType, s: Seeds) -> Option<f64> {
         let (dlo, dhi) = ft.diameter_um;
         Some(match &r.diameter_um {
-            Some(d) => self.in_range("fibers.diameter_um", d, 1.0, 200.0, false)?,
+            Some(d) => self.in_bounds("fibers.diameter_um", d, DIAMETER_UM)?,
             None => {
                 use rand_core::Rng;
                 let mut rng = crate::math::rng::batch_rng(s.seed ^ 0xd1a_3e7e5, s.variant);
@@ -189,7 +201,7 @@ impl FiberCx {
         v: &RawSection,
         seeds: Seeds,
     ) -> Option<(SectionSource, Section)> {
-        if shape.value == "ellipse" {
+        if shape.value == ELLIPSE {
             let Some(ratio) = &v.ratio else {
                 self.invalid(
                     loc(shape),
@@ -198,7 +210,7 @@ impl FiberCx {
                 );
                 return None;
             };
-            let ratio = self.in_range("fibers.section.ratio", ratio, 0.05, 1.0, false)?;
+            let ratio = self.in_bounds("fibers.section.ratio", ratio, RATIO)?;
             return Some((
                 SectionSource::Ellipse { ratio },
                 Section::Conic {
@@ -217,7 +229,7 @@ impl FiberCx {
         }
         // `ellipse` was handled above; it is listed so the error names every shape.
         let mut opts: Vec<(&str, Shape)> = Shape::ALL.to_vec();
-        opts.push(("ellipse", Shape::Circle));
+        opts.push((ELLIPSE, Shape::Circle));
         let sh = self.choice("fibers.section.shape", shape, &opts)?;
         self.generated(name, sh, seeds)
     }
@@ -264,13 +276,13 @@ impl FiberCx {
             );
             return None;
         };
-        let um_per_px = self.in_range("fibers.section.um_per_px", um, 0.0, 100.0, true)?;
+        let um_per_px = self.in_bounds("fibers.section.um_per_px", um, UM_PER_PX)?;
         let mut o = MaskOptions::new(um_per_px);
         o.max_pixels = limits.mask_pixels;
         o.max_vertices = limits.polygon_vertices;
         if let Some(sp) = &v.smoothing_passes {
             o.smoothing_passes =
-                self.in_range("fibers.section.smoothing_passes", sp, 0.0, 100.0, false)? as usize;
+                self.in_bounds("fibers.section.smoothing_passes", sp, SMOOTHING_PASSES)? as usize;
         }
         let file: PathBuf = self.data_file(
             m,

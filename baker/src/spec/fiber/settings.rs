@@ -6,10 +6,31 @@ use super::raw::{RawBake, RawLambda};
 use super::FiberCx;
 use crate::fiber::slices::BakeSettings;
 use crate::fiber::sweep::ChannelKind;
-use crate::spec::check::loc;
+use crate::spec::check::{loc, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
 use crate::spec::yaml::Spanned;
 use formats::Precision;
+
+/// `bake.resolution_deg`: angular bin width, degrees (a divisor of 180).
+pub(in crate::spec) const RESOLUTION_DEG: Bounds = Bounds::closed(0.25, 30.0);
+/// `bake.photons_per_direction`: photons traced per stored incoming bin.
+pub(in crate::spec) const PHOTONS_PER_DIRECTION: Bounds = Bounds::whole(1.0, 1e12);
+/// `bake.seed`: any whole number an f64 holds exactly (up to 2^53).
+pub(in crate::spec) const SEED: Bounds = Bounds::whole(0.0, 9_007_199_254_740_992.0);
+/// `bake.split`: draws per boundary event of the main path.
+pub(in crate::spec) const SPLIT: Bounds = Bounds::whole(1.0, 64.0);
+/// `bake.precision`: of the stored tables.
+pub(in crate::spec) const PRECISIONS: [(&str, Precision); 2] =
+    [("f16", Precision::F16), ("f32", Precision::F32)];
+/// `bake.channels`: linear sRGB (D65) or one channel per wavelength.
+pub(in crate::spec) const CHANNELS: [(&str, ChannelKind); 2] = [
+    ("rgb", ChannelKind::Rgb),
+    ("spectral", ChannelKind::Spectral),
+];
+/// `bake.lambda_nm.start` and `end`: the colour-matching tables, nm.
+pub(in crate::spec) const LAMBDA_NM: Bounds = Bounds::closed(360.0, 830.0);
+/// `bake.lambda_nm.step`, nm.
+pub(in crate::spec) const LAMBDA_STEP_NM: Bounds = Bounds::above(0.0, 100.0);
 
 impl FiberCx {
     pub(super) fn bake(&mut self, b: &RawBake, limits: &Limits) -> BakeSettings {
@@ -21,33 +42,22 @@ impl FiberCx {
         let photons = self.count(
             "bake.photons_per_direction",
             &b.photons_per_direction,
-            1.0,
-            1e12,
+            PHOTONS_PER_DIRECTION.lo,
+            PHOTONS_PER_DIRECTION.hi,
             d.photons,
         );
-        let seed = self.count("bake.seed", &b.seed, 0.0, 2f64.powi(53), d.seed);
-        let split = self.count("bake.split", &b.split, 1.0, 64.0, d.split as u64) as u32;
+        let seed = self.count("bake.seed", &b.seed, SEED.lo, SEED.hi, d.seed);
+        let split = self.count("bake.split", &b.split, SPLIT.lo, SPLIT.hi, d.split as u64) as u32;
         let precision = match &b.precision {
             Some(p) => self
-                .choice(
-                    "bake.precision",
-                    p,
-                    &[("f16", Precision::F16), ("f32", Precision::F32)],
-                )
+                .choice("bake.precision", p, &PRECISIONS)
                 .unwrap_or(d.precision),
             None => d.precision,
         };
         let keep_bits = self.keep_bits(&b.keep_bits, precision);
         let channels = match &b.channels {
             Some(c) => self
-                .choice(
-                    "bake.channels",
-                    c,
-                    &[
-                        ("rgb", ChannelKind::Rgb),
-                        ("spectral", ChannelKind::Spectral),
-                    ],
-                )
+                .choice("bake.channels", c, &CHANNELS)
                 .unwrap_or(d.channels),
             None => d.channels,
         };
@@ -72,7 +82,7 @@ impl FiberCx {
 
     /// `resolution_deg`: in range and a divisor of 180 (the angular grid's bins).
     fn resolution_deg(&mut self, r: &Spanned<f64>) -> Option<f64> {
-        let x = self.in_range("bake.resolution_deg", r, 0.25, 30.0, false)?;
+        let x = self.in_bounds("bake.resolution_deg", r, RESOLUTION_DEG)?;
         if crate::fiber::AngularGrid::new(x).is_ok() {
             return Some(x);
         }
@@ -111,9 +121,9 @@ impl FiberCx {
     /// `lambda_nm: {start, end, step}`, the bake's spectrum (counted before any wavelength is
     /// built); `None` for the default.
     fn lambda_nm(&mut self, r: &RawLambda, limits: &Limits) -> Option<Vec<f64>> {
-        let a = self.in_range("bake.lambda_nm.start", &r.start, 360.0, 830.0, false);
-        let e = self.in_range("bake.lambda_nm.end", &r.end, 360.0, 830.0, false);
-        let st = self.in_range("bake.lambda_nm.step", &r.step, 0.0, 100.0, true);
+        let a = self.in_bounds("bake.lambda_nm.start", &r.start, LAMBDA_NM);
+        let e = self.in_bounds("bake.lambda_nm.end", &r.end, LAMBDA_NM);
+        let st = self.in_bounds("bake.lambda_nm.step", &r.step, LAMBDA_STEP_NM);
         match (a, e, st) {
             (Some(a), Some(e), Some(st)) if e >= a => {
                 let n = wavelength_count(a, e, st);

@@ -11,6 +11,7 @@ mod params;
 pub mod profiles;
 pub mod raw;
 mod resolve;
+mod schema;
 mod sweep;
 mod types;
 mod wavelengths;
@@ -20,6 +21,7 @@ use super::yaml;
 use cx::SkinCx;
 pub use profiles::{ProfileSettings, DEFAULT_PROFILE_PHOTONS};
 use raw::RawSpec;
+pub(super) use schema::refine as refine_schema;
 pub use types::{ResolvedEntry, SkinSpec, AGE_RANGE_YEARS, LAMBDA_RANGE_NM};
 
 /// Validates spec text; `file` names it in messages.

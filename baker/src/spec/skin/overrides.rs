@@ -8,18 +8,29 @@ use crate::skin::params::{CollagenAging, SkewNormal};
 use crate::skin::{
     Freeze, HypodermisAbsorption, PheomelaninAbsorption, SkinLayer, SkinParams, SkinTypeMelanin,
 };
-use crate::spec::check::loc;
+use crate::spec::check::{loc, Bounds};
 use crate::spec::yaml::Spanned;
 
 /// A number an entry may override: its field, where the spec gives it, the range it must be
 /// in (`open_lo`: the lower bound excluded) and the model input it sets.
-struct Range {
-    field: &'static str,
+pub(in crate::spec) struct Range {
+    pub(in crate::spec) field: &'static str,
     given: fn(&RawParams) -> &Scalar<f64>,
-    lo: f64,
-    hi: f64,
-    open_lo: bool,
+    pub(in crate::spec) lo: f64,
+    pub(in crate::spec) hi: f64,
+    pub(in crate::spec) open_lo: bool,
     value: fn(&mut SkinParams) -> &mut f64,
+}
+
+impl Range {
+    pub(in crate::spec) const fn bounds(&self) -> Bounds {
+        Bounds {
+            lo: self.lo,
+            hi: self.hi,
+            open_lo: self.open_lo,
+            whole: false,
+        }
+    }
 }
 
 /// `field => model input, lo, hi, open_lo`.
@@ -37,7 +48,7 @@ macro_rules! range {
 }
 
 /// Blood, bilirubin, carotene and melanin.
-const BLOOD_AND_PIGMENTS: [Range; 10] = [
+pub(in crate::spec) const BLOOD_AND_PIGMENTS: [Range; 10] = [
     // Table 2: ϑHb in [0.1, 20] % in the dermis.
     range!(blood_fraction_pd => blood_fraction_pd, 0.001, 0.2, false),
     range!(blood_fraction_rd => blood_fraction_rd, 0.001, 0.2, false),
@@ -53,62 +64,95 @@ const BLOOD_AND_PIGMENTS: [Range; 10] = [
 ];
 
 /// The dermal–epidermal junction's amplitude (at 30 years) and period.
-const JUNCTION: [Range; 2] = [
+pub(in crate::spec) const JUNCTION: [Range; 2] = [
     range!(dej_amplitude_um => dej_amplitude_at_30_um, 0.0, 200.0, false),
     range!(dej_period_um => dej_period_um, 10.0, 2000.0, false),
 ];
 
+/// `skin_type_melanin`: how a skin type becomes melanin (the caption's or Fig. 40's values).
+pub(in crate::spec) const SKIN_TYPE_MELANIN: [(&str, SkinTypeMelanin); 2] = [
+    ("caption", SkinTypeMelanin::Caption),
+    ("figure40", SkinTypeMelanin::Figure40),
+];
+/// `pheomelanin_absorption`: the thesis's fit or the measured spectrum.
+pub(in crate::spec) const PHEOMELANIN_ABSORPTION: [(&str, PheomelaninAbsorption); 2] = [
+    ("thesis_fit", PheomelaninAbsorption::ThesisFit),
+    ("measured", PheomelaninAbsorption::Measured),
+];
+/// `hypodermis_absorption`: blood and water, or water only.
+pub(in crate::spec) const HYPODERMIS_ABSORPTION: [(&str, HypodermisAbsorption); 2] = [
+    ("blood", HypodermisAbsorption::Blood),
+    ("water_only", HypodermisAbsorption::WaterOnly),
+];
+/// Sets one flag of a [`Freeze`].
+type FreezeFlag = fn(&mut Freeze);
+
+/// `freeze:`, the aging processes that can be held at their age-30 values.
+pub(in crate::spec) const FREEZABLE: [(&str, FreezeFlag); 6] = [
+    ("thickness", |f| f.thickness = true),
+    ("melanin", |f| f.melanin = true),
+    ("hemoglobin", |f| f.hemoglobin = true),
+    ("surface", |f| f.surface = true),
+    ("collagen", |f| f.collagen = true),
+    ("junction", |f| f.junction = true),
+];
+
+/// Per-layer water volume fraction (Table 2).
+pub(in crate::spec) const WATER_FRACTION: Bounds = Bounds::closed(0.0, 0.95);
+/// Per-layer thickness at 30 years, mm.
+pub(in crate::spec) const THICKNESS_MM: Bounds = Bounds::above(0.0, 100.0);
+/// Per-layer relative thinning per decade past 30.
+pub(in crate::spec) const ATROPHY_PER_DECADE: Bounds = Bounds::closed(0.0, 0.5);
+/// Surface roughness Rz, µm.
+pub(in crate::spec) const RZ_UM: Bounds = Bounds::above(0.0, 1000.0);
+/// Sebum on the surface, mg.
+pub(in crate::spec) const SEBUM_MG: Bounds = Bounds::closed(0.0, 10.0);
+/// Volume of the sebum film per mg.
+pub(in crate::spec) const SEBUM_VOLUME_FACTOR: Bounds = Bounds::above(0.0, 10.0);
+/// Collagen fibre diameter distribution (Eqs. 8–9): location and scale, µm; shape.
+pub(in crate::spec) const COLLAGEN_LOCATION_UM: Bounds = Bounds::closed(0.5, 40.0);
+pub(in crate::spec) const COLLAGEN_SCALE_UM: Bounds = Bounds::closed(0.05, 40.0);
+pub(in crate::spec) const COLLAGEN_SHAPE: Bounds = Bounds::closed(-20.0, 20.0);
+
 impl SkinCx {
     /// Biophysical overrides; ranges cite the table that motivates them.
     pub(super) fn overrides(&mut self, p: &RawParams, s: &mut SkinParams) {
-        let melanin = [
-            ("caption", SkinTypeMelanin::Caption),
-            ("figure40", SkinTypeMelanin::Figure40),
-        ];
         self.choose(
             "skin_type_melanin",
             &p.skin_type_melanin,
-            &melanin,
+            &SKIN_TYPE_MELANIN,
             &mut s.skin_type_melanin,
         );
         self.ranges(p, s, &BLOOD_AND_PIGMENTS);
-        let pheomelanin = [
-            ("thesis_fit", PheomelaninAbsorption::ThesisFit),
-            ("measured", PheomelaninAbsorption::Measured),
-        ];
         self.choose(
             "pheomelanin_absorption",
             &p.pheomelanin_absorption,
-            &pheomelanin,
+            &PHEOMELANIN_ABSORPTION,
             &mut s.pheomelanin_absorption,
         );
-        let hypodermis = [
-            ("blood", HypodermisAbsorption::Blood),
-            ("water_only", HypodermisAbsorption::WaterOnly),
-        ];
         self.choose(
             "hypodermis_absorption",
             &p.hypodermis_absorption,
-            &hypodermis,
+            &HYPODERMIS_ABSORPTION,
             &mut s.hypodermis_absorption,
         );
         self.layer_values(
             "water_fraction",
             &p.water_fraction,
             &mut s.water_fraction,
-            (0.0, 0.95, false),
+            WATER_FRACTION,
         );
         self.layer_values(
             "thickness_mm",
             &p.thickness_mm,
             &mut s.thickness_at_30_mm,
-            (0.0, 100.0, true),
+            THICKNESS_MM,
         );
         self.layer_values(
             "atrophy_per_decade",
             &p.atrophy_per_decade,
             &mut s.atrophy_per_decade,
-            (0.0, 0.5, false),
+            ATROPHY_PER_DECADE,
         );
         self.ranges(p, s, &JUNCTION);
         self.surface(p, s);
@@ -161,17 +205,15 @@ impl SkinCx {
             }
         }
         if let Some(v) = &p.rz_um {
-            s.rz_um = self.in_range("rz_um", v, 0.0, 1000.0, true);
+            s.rz_um = self.in_bounds("rz_um", v, RZ_UM);
         }
         if let Some(v) = &p.sebum_mg {
-            s.sebum_mg = self.in_range("sebum_mg", v, 0.0, 10.0, false);
+            s.sebum_mg = self.in_bounds("sebum_mg", v, SEBUM_MG);
         }
-        s.sebum_volume_factor = self.opt_range(
+        s.sebum_volume_factor = self.opt_bounds(
             "sebum_volume_factor",
             &p.sebum_volume_factor,
-            0.0,
-            10.0,
-            true,
+            SEBUM_VOLUME_FACTOR,
             s.sebum_volume_factor,
         );
     }
@@ -181,13 +223,13 @@ impl SkinCx {
         field: &str,
         raw: &Option<Spanned<RawLayerValues>>,
         out: &mut [f64; 5],
-        range: (f64, f64, bool),
+        range: Bounds,
     ) {
         let Some(raw) = raw else { return };
         for (layer, v) in SkinLayer::ALL.iter().zip(raw.value.as_array()) {
             if let Some(v) = v {
                 let name = format!("{field}.{}", layer.key());
-                if let Some(x) = self.in_range(&name, v, range.0, range.1, range.2) {
+                if let Some(x) = self.in_bounds(&name, v, range) {
                     out[layer.index()] = x;
                 }
             }
@@ -197,30 +239,24 @@ impl SkinCx {
     fn collagen(&mut self, field: &str, c: &RawCollagen) -> CollagenAging {
         let mut one = |age: &str, s: &Spanned<RawSkewNormal>| SkewNormal {
             location_um: self
-                .in_range(
+                .in_bounds(
                     &format!("{field}.{age}.location_um"),
                     &s.value.location_um,
-                    0.5,
-                    40.0,
-                    false,
+                    COLLAGEN_LOCATION_UM,
                 )
                 .unwrap_or(1.0),
             scale_um: self
-                .in_range(
+                .in_bounds(
                     &format!("{field}.{age}.scale_um"),
                     &s.value.scale_um,
-                    0.05,
-                    40.0,
-                    false,
+                    COLLAGEN_SCALE_UM,
                 )
                 .unwrap_or(1.0),
             shape: self
-                .in_range(
+                .in_bounds(
                     &format!("{field}.{age}.shape"),
                     &s.value.shape,
-                    -20.0,
-                    20.0,
-                    false,
+                    COLLAGEN_SHAPE,
                 )
                 .unwrap_or(0.0),
         };
@@ -233,18 +269,13 @@ impl SkinCx {
     fn freeze(&mut self, list: &Spanned<Vec<Spanned<String>>>) -> Freeze {
         let mut f = Freeze::default();
         for item in &list.value {
-            match item.value.as_str() {
-                "thickness" => f.thickness = true,
-                "melanin" => f.melanin = true,
-                "hemoglobin" => f.hemoglobin = true,
-                "surface" => f.surface = true,
-                "collagen" => f.collagen = true,
-                "junction" => f.junction = true,
-                other => self.out_of_range(
+            match FREEZABLE.iter().find(|(k, _)| *k == item.value) {
+                Some((_, set)) => set(&mut f),
+                None => self.out_of_range(
                     loc(item),
                     "freeze",
-                    format!("{other:?}"),
-                    "thickness, melanin, hemoglobin, surface, collagen, junction".into(),
+                    format!("{:?}", item.value),
+                    FREEZABLE.map(|(k, _)| k).join(", "),
                 ),
             }
         }

@@ -6,8 +6,28 @@ use super::raw::{RawParams, Token};
 use super::sweep::Point;
 use super::types::AGE_RANGE_YEARS;
 use crate::skin::{BodyLocation, Gender, MelaninInput, ModelKind, SkinParams, SkinType};
-use crate::spec::check::loc;
+use crate::spec::check::{loc, Bounds};
 use crate::spec::yaml::Spanned;
+
+/// `gender:` (sebum production, §3.4.2).
+pub(in crate::spec) const GENDERS: [(&str, Gender); 2] =
+    [("female", Gender::Female), ("male", Gender::Male)];
+/// `location:`, the body sites the model has thicknesses for (Table 1).
+pub(in crate::spec) const LOCATIONS: [(&str, BodyLocation); 4] = [
+    ("face", BodyLocation::Face),
+    ("forearm", BodyLocation::Forearm),
+    ("back_of_hand", BodyLocation::BackOfHand),
+    ("palm", BodyLocation::Palm),
+];
+/// `model:` (five-layer by default).
+pub(in crate::spec) const MODELS: [(&str, ModelKind); 2] = [
+    ("five_layer", ModelKind::FiveLayer),
+    ("three_layer", ModelKind::ThreeLayer),
+];
+/// `xi`, exposure to external aging agents ξ (Eq. 4), 0–1.
+pub(in crate::spec) const XI: Bounds = Bounds::closed(0.0, 1.0);
+/// `melanosome_fraction` ϑm at age 30, in place of a skin type (Table 2: up to 50 %).
+pub(in crate::spec) const MELANOSOME_FRACTION: Bounds = Bounds::closed(0.0, 0.5);
 
 impl SkinCx {
     /// Builds the model inputs of one point; records errors and returns None if any.
@@ -25,22 +45,15 @@ impl SkinCx {
                 None
             }
         };
-        let gender_opts = [("female", Gender::Female), ("male", Gender::Male)];
         let gender = match &pt.gender {
-            Some(g) => self.choice("gender", g, &gender_opts),
+            Some(g) => self.choice("gender", g, &GENDERS),
             None => {
                 self.invalid(at, "gender", "missing (female or male)");
                 None
             }
         };
-        let loc_opts = [
-            ("face", BodyLocation::Face),
-            ("forearm", BodyLocation::Forearm),
-            ("back_of_hand", BodyLocation::BackOfHand),
-            ("palm", BodyLocation::Palm),
-        ];
         let location = match &pt.location {
-            Some(l) => self.choice("location", l, &loc_opts),
+            Some(l) => self.choice("location", l, &LOCATIONS),
             None => {
                 self.invalid(
                     at,
@@ -51,7 +64,7 @@ impl SkinCx {
             }
         };
         let xi = match &pt.xi {
-            Some(x) => self.in_range("xi", x, 0.0, 1.0, false),
+            Some(x) => self.in_bounds("xi", x, XI),
             None => {
                 self.invalid(at, "xi", "missing (exposure to external aging agents, 0–1)");
                 None
@@ -60,7 +73,7 @@ impl SkinCx {
         let melanin = match (&pt.skin_type, &pt.melanosome_fraction) {
             (Some(t), None) => self.skin_type(t).map(MelaninInput::SkinType),
             (None, Some(f)) => self
-                .in_range("melanosome_fraction", f, 0.0, 0.5, false)
+                .in_bounds("melanosome_fraction", f, MELANOSOME_FRACTION)
                 .map(MelaninInput::MelanosomeFraction),
             (Some(t), Some(f)) => {
                 self.invalid(
@@ -83,14 +96,7 @@ impl SkinCx {
             }
         };
         let model = match &pt.model {
-            Some(m) => self.choice(
-                "model",
-                m,
-                &[
-                    ("five_layer", ModelKind::FiveLayer),
-                    ("three_layer", ModelKind::ThreeLayer),
-                ],
-            ),
+            Some(m) => self.choice("model", m, &MODELS),
             None => Some(ModelKind::FiveLayer),
         };
         let (Some(age), Some(gender), Some(location), Some(xi), Some(melanin), Some(model)) =
@@ -110,7 +116,9 @@ impl SkinCx {
                 .iter()
                 .find(|k| k.roman() == s.as_str())
                 .copied(),
-            Token::Number(x) if x.fract() == 0.0 && (1.0..=6.0).contains(x) => {
+            Token::Number(x)
+                if x.fract() == 0.0 && (1.0..=SkinType::ALL.len() as f64).contains(x) =>
+            {
                 Some(SkinType::ALL[*x as usize - 1])
             }
             Token::Number(_) => None,

@@ -4,7 +4,7 @@
 
 use super::cx::SkinCx;
 use super::raw::{RawRadial, RawSpec};
-use crate::spec::check::{count_text, loc, num};
+use crate::spec::check::{count_text, loc, num, Bounds};
 use crate::spec::limits::Limits;
 use crate::spec::yaml::Spanned;
 
@@ -67,6 +67,23 @@ pub const NOISE_PILOT_MAX: u64 = 100_000;
 /// Packets of a photon boost's pilot run per wavelength: 1 % of `photons`, at most this.
 pub const BOOST_PILOT_MAX: u64 = 20_000;
 
+/// `profiles.photons`: packets per wavelength and shared simulation.
+pub(in crate::spec) const PHOTONS: Bounds = Bounds::whole(1.0, 1e12);
+/// `profiles.seed`: any whole number an f64 holds exactly (up to 2^53).
+pub(in crate::spec) const SEED: Bounds = Bounds::whole(0.0, 9.007_199_254_740_992e15);
+/// `profiles.gaussians`: terms of the sum-of-Gaussians fit.
+pub(in crate::spec) const GAUSSIANS: Bounds = Bounds::whole(1.0, 16.0);
+/// `profiles.max_photon_boost`: at most this many times `photons` for cheap wavelengths.
+pub(in crate::spec) const MAX_PHOTON_BOOST: Bounds = Bounds::whole(1.0, 64.0);
+/// `profiles.noise_target`: relative standard error (0 = `photons` everywhere).
+pub(in crate::spec) const NOISE_TARGET: Bounds = Bounds::closed(0.0, 0.5);
+/// `profiles.radial.dr_min_mm`: width of the fine bins, mm.
+pub(in crate::spec) const DR_MIN_MM: Bounds = Bounds::above(0.0, 1.0);
+/// `profiles.radial.growth`: each coarse bin this many times wider than the one before.
+pub(in crate::spec) const GROWTH: Bounds = Bounds::closed(1.001, 2.0);
+/// `profiles.radial.r_max_mm`: outer radius of the grid, mm.
+pub(in crate::spec) const R_MAX_MM: Bounds = Bounds::above(0.0, 1000.0);
+
 impl SkinCx {
     pub(super) fn profiles(&mut self, raw: &RawSpec, limits: &Limits) -> ProfileSettings {
         let mut s = ProfileSettings::default();
@@ -74,24 +91,32 @@ impl SkinCx {
             return s;
         };
         let p = &p.value;
-        if let Some(n) = self.whole("profiles.photons", &p.photons, 1.0, 1e12) {
+        if let Some(n) = self.whole("profiles.photons", &p.photons, PHOTONS.lo, PHOTONS.hi) {
             s.photons = n;
         }
-        if let Some(n) = self.whole("profiles.seed", &p.seed, 0.0, 9.007_199_254_740_992e15) {
+        if let Some(n) = self.whole("profiles.seed", &p.seed, SEED.lo, SEED.hi) {
             s.seed = n;
         }
-        if let Some(n) = self.whole("profiles.gaussians", &p.gaussians, 1.0, 16.0) {
+        if let Some(n) = self.whole(
+            "profiles.gaussians",
+            &p.gaussians,
+            GAUSSIANS.lo,
+            GAUSSIANS.hi,
+        ) {
             s.gaussians = n as usize;
         }
-        if let Some(n) = self.whole("profiles.max_photon_boost", &p.max_photon_boost, 1.0, 64.0) {
+        if let Some(n) = self.whole(
+            "profiles.max_photon_boost",
+            &p.max_photon_boost,
+            MAX_PHOTON_BOOST.lo,
+            MAX_PHOTON_BOOST.hi,
+        ) {
             s.max_photon_boost = n;
         }
-        s.noise_target = self.opt_range(
+        s.noise_target = self.opt_bounds(
             "profiles.noise_target",
             &p.noise_target,
-            0.0,
-            0.5,
-            false,
+            NOISE_TARGET,
             s.noise_target,
         );
         if s.noise_target > 0.0 && s.max_photon_boost > 1 {
@@ -113,28 +138,17 @@ impl SkinCx {
     fn radial(&mut self, r: &Spanned<RawRadial>, limits: &Limits, s: &mut ProfileSettings) {
         let radial_at = loc(r);
         let r = &r.value;
-        s.dr_min_mm = self.opt_range(
+        s.dr_min_mm = self.opt_bounds(
             "profiles.radial.dr_min_mm",
             &r.dr_min_mm,
-            0.0,
-            1.0,
-            true,
+            DR_MIN_MM,
             s.dr_min_mm,
         );
-        s.growth = self.opt_range(
-            "profiles.radial.growth",
-            &r.growth,
-            1.001,
-            2.0,
-            false,
-            s.growth,
-        );
-        s.r_max_mm = self.opt_range(
+        s.growth = self.opt_bounds("profiles.radial.growth", &r.growth, GROWTH, s.growth);
+        s.r_max_mm = self.opt_bounds(
             "profiles.radial.r_max_mm",
             &r.r_max_mm,
-            0.0,
-            1000.0,
-            true,
+            R_MAX_MM,
             s.r_max_mm,
         );
         if s.r_max_mm <= s.dr_min_mm {

@@ -4,10 +4,16 @@
 use super::cx::SkinCx;
 use super::raw::{RawSpec, RawWavelengths};
 use super::types::LAMBDA_RANGE_NM;
-use crate::spec::check::{count_text, loc};
+use crate::spec::check::{count_text, loc, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
 use crate::spec::yaml::Spanned;
 use crate::spectral::WavelengthGrid;
+
+/// `wavelengths.start_nm`, `stop_nm` and each of `list_nm`: the embedded spectra, nm.
+pub(in crate::spec) const LAMBDA_NM: Bounds = Bounds::closed(LAMBDA_RANGE_NM.0, LAMBDA_RANGE_NM.1);
+/// `wavelengths.step_nm`, nm: positive, at most the whole range.
+pub(in crate::spec) const STEP_NM: Bounds =
+    Bounds::above(0.0, LAMBDA_RANGE_NM.1 - LAMBDA_RANGE_NM.0);
 
 impl SkinCx {
     pub(super) fn wavelengths(&mut self, raw: &RawSpec, limits: &Limits) -> WavelengthGrid {
@@ -28,7 +34,7 @@ impl SkinCx {
         list: &Spanned<Vec<Spanned<f64>>>,
         limits: &Limits,
     ) -> WavelengthGrid {
-        let (lo, hi) = LAMBDA_RANGE_NM;
+        let hi = LAMBDA_NM.hi;
         let range = [&v.start_nm, &v.stop_nm, &v.step_nm];
         if let Some(other) = range.iter().find_map(|x| x.as_ref()) {
             self.invalid(
@@ -43,7 +49,7 @@ impl SkinCx {
         }
         let mut out = Vec::new();
         for x_at in &list.value {
-            if let Some(x) = self.in_range("wavelengths.list_nm", x_at, lo, hi, false) {
+            if let Some(x) = self.in_bounds("wavelengths.list_nm", x_at, LAMBDA_NM) {
                 if let Some(&p) = out.last().filter(|&&p| x <= p) {
                     self.out_of_range(
                         loc(x_at),
@@ -74,11 +80,11 @@ impl SkinCx {
 
     /// `start_nm`, `stop_nm`, `step_nm` (400, 700 and 10 nm by default).
     fn wavelength_range(&mut self, w: &Spanned<RawWavelengths>, limits: &Limits) -> WavelengthGrid {
-        let (lo, hi) = LAMBDA_RANGE_NM;
+        let (lo, hi) = (LAMBDA_NM.lo, LAMBDA_NM.hi);
         let v = &w.value;
-        let start = self.opt_range("wavelengths.start_nm", &v.start_nm, lo, hi, false, 400.0);
-        let stop = self.opt_range("wavelengths.stop_nm", &v.stop_nm, lo, hi, false, 700.0);
-        let step = self.opt_range("wavelengths.step_nm", &v.step_nm, 0.0, hi - lo, true, 10.0);
+        let start = self.opt_bounds("wavelengths.start_nm", &v.start_nm, LAMBDA_NM, 400.0);
+        let stop = self.opt_bounds("wavelengths.stop_nm", &v.stop_nm, LAMBDA_NM, 700.0);
+        let step = self.opt_bounds("wavelengths.step_nm", &v.step_nm, STEP_NM, 10.0);
         if stop < start {
             match (&v.stop_nm, &v.start_nm) {
                 (Some(s), _) => self.out_of_range(
