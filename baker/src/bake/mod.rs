@@ -17,6 +17,7 @@
 //! prints for itself.
 
 pub mod destination;
+pub mod estimate;
 pub mod fiber;
 pub mod gc;
 pub mod job;

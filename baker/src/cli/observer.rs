@@ -60,16 +60,20 @@ impl Observer for Terminal {
         eprintln!("warning: {msg}");
     }
 
-    fn bar(&self, total: u64, label: &str) -> Option<Arc<dyn Bar>> {
+    fn bar(&self, total: u64, label: &str, unit: &str) -> Option<Arc<dyn Bar>> {
         std::io::stderr()
             .is_terminal()
-            .then(|| Arc::new(super::progress::bar(total, label)) as Arc<dyn Bar>)
+            .then(|| Arc::new(super::progress::bar_of(total, label, unit)) as Arc<dyn Bar>)
     }
 }
 
 impl Bar for ProgressBar {
     fn set_position(&self, pos: u64) {
         ProgressBar::set_position(self, pos);
+    }
+
+    fn set_length(&self, total: u64) {
+        ProgressBar::set_length(self, total);
     }
 
     fn set_message(&self, msg: &str) {

@@ -32,6 +32,9 @@ pub struct PlanArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Skip the time estimate (a calibration run of about a second per spec).
+    #[arg(long)]
+    pub no_estimate: bool,
 }
 
 /// `baker plan`: the work units of the specs, their cost and whether they are cached, and
@@ -49,16 +52,22 @@ pub fn run(p: PlanArgs) -> anyhow::Result<()> {
     };
     let o = req.overrides();
     let cache = crate::pipeline::Cache::new(req.cache_dir(), crate::pipeline::CacheMode::Use);
-    let mut units = Vec::new();
+    let mut report = bake::plan::Report {
+        units: Vec::new(),
+        calibration_s: None,
+        threads: req.thread_count(),
+    };
     let mut costs = Vec::new();
     for path in &p.specs {
         let (spec, cost) = bake::load_checked(path, &o)?;
         let stem = bake::spec_stem(path)?;
-        units.extend(bake::plan::plan_units(&spec, &stem, &req, &cache)?);
+        let plan = bake::plan::plan_units(&spec, &stem, &req, &cache, !p.no_estimate)?;
+        report.units.extend(plan.units);
+        if let Some(c) = plan.calibration_s {
+            *report.calibration_s.get_or_insert(0.0) += c;
+        }
         costs.push((path.clone(), cost, *spec.limits()));
     }
-    let cached = units.iter().filter(|u| u.cached).count();
-    let photons: u64 = units.iter().filter(|u| !u.cached).map(|u| u.photons).sum();
     if p.json {
         let budgets: Vec<serde_json::Value> = costs
             .iter()
@@ -70,33 +79,16 @@ pub fn run(p: PlanArgs) -> anyhow::Result<()> {
         outln!(
             "{}",
             serde_json::to_string_pretty(&serde_json::json!({
-                "units": units, "total": units.len(), "cached": cached,
-                "photons_to_trace": photons, "cache": cache.dir, "budget": budgets,
+                "units": report.units, "total": report.units.len(), "cached": report.cached(),
+                "photons_to_trace": report.photons_to_trace(), "cache": cache.dir,
+                "budget": budgets, "estimate_s": report.estimate_s(),
+                "calibration_s": report.calibration_s, "threads": report.threads,
             }))?
         )?;
         return Ok(());
     }
-    outln!(
-        "{:<56} {:>7} {:>14} {}",
-        "unit",
-        "shard#",
-        "photons",
-        "cached"
-    )?;
-    for u in &units {
-        outln!(
-            "{:<56} {:>7} {:>14} {}",
-            u.id,
-            u.index.map_or("-".into(), |i| i.to_string()),
-            u.photons,
-            if u.cached { "yes" } else { "no" }
-        )?;
-    }
-    outln!(
-        "{} units, {cached} cached; {photons} photons to trace (cache {})",
-        units.len(),
-        cache.dir.display()
-    )?;
+    outln!("{}", report.table())?;
+    outln!("cache {}", cache.dir.display())?;
     for (path, c, l) in &costs {
         outln!(
             "{}: at most {} on {} thread(s) (limits: {:.3e} photons, {} GiB)",

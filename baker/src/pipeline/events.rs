@@ -5,20 +5,44 @@
 //! | event | fields |
 //! |---|---|
 //! | `bake_started` | `spec`, `kind` (`skin` or `fiber`), `entries` |
-//! | `unit_started` | `unit` (id), `key` |
-//! | `unit_finished` | `unit`, `key`, `seconds`, `photons` |
-//! | `cache_hit` | `unit`, `key` |
+//! | `phase_started` | `phase` (`simulation`, `fitting`, `tracing`), `label` (a fiber entry's name), `units`, `photons_total` (expected) |
+//! | `unit_started` | `unit` (id), `key`, and the phase's counts (below) |
+//! | `unit_finished` | `unit`, `key`, `seconds`, `photons`, and the phase's counts |
+//! | `cache_hit` | `unit`, `key`, and the phase's counts |
+//! | `phase_finished` | `phase`, `label`, `units` (done), `photons` (done), `seconds` |
 //! | `up_to_date` | `spec` (nothing to do: same spec, flags and executable, outputs intact) |
 //! | `output` | `path` (a final file, written atomically) |
 //! | `summary` | `spec`, `units_computed`, `cache_hits`, `seconds`, `shard` |
 //! | `interrupted` | `units_computed`, `resume` (the command to run again) |
 //! | `error` | `message`, `exit_code` |
 //!
+//! A skin bake runs the phases `simulation` (one unit per simulation group and wavelength)
+//! and `fitting` (one Gaussian fit per entry, no photons); a fiber bake one `tracing` phase
+//! per entry (`label`: the entry). Unit events of a phase carry its counts: `phase`,
+//! `index` (1-based: the how-manieth unit of the phase to start, for `unit_started`, or to be
+//! done — computed or from the cache — for `unit_finished` and `cache_hit`; so each rises by
+//! one per event and the last done index is `total`), `total` (units of the phase, cached
+//! ones included), `photons_done` (photons of the phase's units done so far) and
+//! `photons_total` (of all its units: the real count of each unit started or cached, the
+//! expected count of the rest — a skin run's boost of cheap wavelengths raises it). Pilot
+//! runs (`…/pilot/…`) choose photon counts before their simulation: their events have no
+//! phase counts.
+//!
 //! Who listens is an [`Observer`]: the command line implements it (`cli/observer.rs`) with an
 //! indicatif bar on a terminal, a line every ~5 % otherwise, JSON lines for `--progress json`,
 //! or nothing but errors and warnings for `--quiet`. The library never names a terminal type.
 
 use std::sync::Arc;
+
+/// A unit's place in its phase, for the JSON events.
+#[derive(Debug, Clone)]
+pub struct Place {
+    pub phase: String,
+    pub index: u64,
+    pub total: u64,
+    pub photons_done: u64,
+    pub photons_total: u64,
+}
 
 /// A listener for a bake's progress and messages.
 pub trait Observer: Send + Sync {
@@ -32,14 +56,17 @@ pub trait Observer: Send + Sync {
     fn notice(&self, msg: &str);
     /// A warning about the results: always shown.
     fn warn(&self, msg: &str);
-    /// A progress bar over `total` units labelled `label`, where one can be drawn (a
-    /// terminal); `None` otherwise, and the caller prints periodic lines through `say`.
-    fn bar(&self, total: u64, label: &str) -> Option<Arc<dyn Bar>>;
+    /// A progress bar over `total` items (`unit`: `photons`, `directions`, `profiles`, for
+    /// its rate) labelled `label`, where one can be drawn (a terminal); `None` otherwise, and
+    /// the caller prints periodic lines through `say`.
+    fn bar(&self, total: u64, label: &str, unit: &str) -> Option<Arc<dyn Bar>>;
 }
 
 /// A progress bar the library advances (photons, directions) and labels.
 pub trait Bar: crate::progress::Progress {
     fn set_position(&self, pos: u64);
+    /// The items the bar counts to (the work left changed: cached units, a boost).
+    fn set_length(&self, total: u64);
     fn set_message(&self, msg: &str);
     /// Clears the bar when its work is done.
     fn finish(&self);
@@ -57,7 +84,7 @@ impl Observer for Silent {
     fn say(&self, _: &str) {}
     fn notice(&self, _: &str) {}
     fn warn(&self, _: &str) {}
-    fn bar(&self, _: u64, _: &str) -> Option<Arc<dyn Bar>> {
+    fn bar(&self, _: u64, _: &str, _: &str) -> Option<Arc<dyn Bar>> {
         None
     }
 }
@@ -105,9 +132,9 @@ impl Events {
     }
 
     /// A bar for people on a terminal.
-    pub fn bar(&self, total: u64, label: &str) -> Option<Arc<dyn Bar>> {
+    pub fn bar(&self, total: u64, label: &str, unit: &str) -> Option<Arc<dyn Bar>> {
         if self.0.human() {
-            self.0.bar(total, label)
+            self.0.bar(total, label, unit)
         } else {
             None
         }
@@ -118,24 +145,50 @@ impl Events {
         self.0.event(&v);
     }
 
-    pub fn cache_hit(&self, id: &str, key: &super::Key) {
-        self.emit(serde_json::json!({"event": "cache_hit", "unit": id, "key": key.hex()}));
+    pub fn cache_hit(&self, id: &str, key: &super::Key, place: Option<Place>) {
+        self.emit(with_place(
+            serde_json::json!({"event": "cache_hit", "unit": id, "key": key.hex()}),
+            place,
+        ));
     }
 
-    pub fn unit_started(&self, id: &str, key: &super::Key) {
-        self.emit(serde_json::json!({"event": "unit_started", "unit": id, "key": key.hex()}));
+    pub fn unit_started(&self, id: &str, key: &super::Key, place: Option<Place>) {
+        self.emit(with_place(
+            serde_json::json!({"event": "unit_started", "unit": id, "key": key.hex()}),
+            place,
+        ));
     }
 
-    pub fn unit_finished(&self, id: &str, key: &super::Key, seconds: f64, photons: u64) {
-        self.emit(
+    pub fn unit_finished(
+        &self,
+        id: &str,
+        key: &super::Key,
+        seconds: f64,
+        photons: u64,
+        place: Option<Place>,
+    ) {
+        self.emit(with_place(
             serde_json::json!({"event": "unit_finished", "unit": id, "key": key.hex(),
             "seconds": seconds, "photons": photons}),
-        );
+            place,
+        ));
     }
 
     pub fn output(&self, path: &std::path::Path) {
         self.emit(serde_json::json!({"event": "output", "path": path.display().to_string()}));
     }
+}
+
+/// `v` with a unit's place in its phase (see the module docs).
+fn with_place(mut v: serde_json::Value, place: Option<Place>) -> serde_json::Value {
+    if let (Some(p), Some(o)) = (place, v.as_object_mut()) {
+        o.insert("phase".into(), p.phase.into());
+        o.insert("index".into(), p.index.into());
+        o.insert("total".into(), p.total.into());
+        o.insert("photons_done".into(), p.photons_done.into());
+        o.insert("photons_total".into(), p.photons_total.into());
+    }
+    v
 }
 
 /// `bar` as a progress sink for the physics.

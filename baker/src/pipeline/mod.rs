@@ -17,6 +17,7 @@
 pub mod cache;
 pub mod events;
 pub mod interrupt;
+pub mod phase;
 
 use std::fmt;
 
@@ -24,6 +25,7 @@ use sha2::{Digest, Sha256};
 
 pub use cache::{Cache, CacheMode};
 pub use events::{Bar, Events, Observer};
+pub use phase::{Phase, PhaseSpec};
 
 /// Bumped whenever a change to the transport or the bake's unit definitions would change a
 /// unit's result for the same inputs: old cache entries then stop matching.
@@ -144,9 +146,16 @@ pub struct UnitInfo {
     /// Index in the spec's unit list (sharding uses it); pilots are not sharded (`None`).
     pub index: Option<usize>,
     /// Estimated cost: photon packets (skin: before the boost of cheap wavelengths; fibers:
-    /// packets × cross-sections × directions).
+    /// packets × cross-sections × directions; 0 for fits).
     pub photons: u64,
     pub cached: bool,
+    /// `pilot`, `transport` (a skin simulation), `fit` (a skin entry's Gaussian fit) or
+    /// `fiber` (stored directions of a fiber entry).
+    pub kind: &'static str,
+    /// Estimated wall-clock seconds on the bake's threads (0 when cached), from `baker
+    /// plan`'s calibration; absent with `--no-estimate`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate_s: Option<f64>,
 }
 
 /// Why a unit's result is not available.
@@ -173,6 +182,8 @@ pub struct Runner {
     pub used: std::sync::Mutex<Vec<(String, Key)>>,
     /// Stops units at their next batch (SIGINT/SIGTERM in a bake).
     pub cancel: crate::cancel::Cancel,
+    /// The running phase, whose counts the unit events carry.
+    pub phase: std::sync::Mutex<Option<std::sync::Arc<Phase>>>,
 }
 
 impl Runner {
@@ -186,7 +197,27 @@ impl Runner {
             hits: Default::default(),
             used: Default::default(),
             cancel: crate::cancel::Cancel::NEVER,
+            phase: Default::default(),
         }
+    }
+
+    /// Starts a phase (its units are counted in the events and the bar); returns it as the
+    /// physics' progress sink.
+    pub fn begin_phase(&self, spec: PhaseSpec) -> std::sync::Arc<Phase> {
+        let p = Phase::start(spec, &self.events);
+        *self.phase.lock().unwrap() = Some(p.clone());
+        p
+    }
+
+    /// Ends the running phase (its bar is cleared, `phase_finished` emitted).
+    pub fn end_phase(&self) {
+        if let Some(p) = self.phase.lock().unwrap().take() {
+            p.finish();
+        }
+    }
+
+    fn current_phase(&self) -> Option<std::sync::Arc<Phase>> {
+        self.phase.lock().unwrap().clone()
     }
 
     /// Whether this process computes the unit at `index` (always, without a shard; pilots
@@ -207,9 +238,39 @@ impl Runner {
 
     /// The result of a unit: from the cache, or computed (and cached) if this process owns
     /// it; `Ok(None)` if another shard owns it. Units without an index (pilot runs, fits) are
-    /// computed by whichever process needs them, `baker merge` included.
+    /// computed by whichever process needs them, `baker merge` included. The unit counts in
+    /// the running phase.
     pub fn unit<T>(
         &self,
+        id: &str,
+        key: Key,
+        index: Option<usize>,
+        photons: u64,
+        compute: impl FnOnce() -> anyhow::Result<T>,
+    ) -> Result<Option<T>, UnitError>
+    where
+        T: serde::Serialize + serde::de::DeserializeOwned,
+    {
+        self.unit_in(self.current_phase(), id, key, index, photons, compute)
+    }
+
+    /// [`Runner::unit`] for a unit outside the phase's counts (a pilot run).
+    pub fn side_unit<T>(
+        &self,
+        id: &str,
+        key: Key,
+        photons: u64,
+        compute: impl FnOnce() -> anyhow::Result<T>,
+    ) -> Result<Option<T>, UnitError>
+    where
+        T: serde::Serialize + serde::de::DeserializeOwned,
+    {
+        self.unit_in(None, id, key, None, photons, compute)
+    }
+
+    fn unit_in<T>(
+        &self,
+        phase: Option<std::sync::Arc<Phase>>,
         id: &str,
         key: Key,
         index: Option<usize>,
@@ -223,7 +284,8 @@ impl Runner {
         if let Some(v) = self.cache.load::<T>(&key) {
             self.hits.fetch_add(1, Relaxed);
             self.used.lock().unwrap().push((id.to_string(), key));
-            self.events.cache_hit(id, &key);
+            let place = phase.as_ref().map(|p| p.unit_done(photons, true));
+            self.events.cache_hit(id, &key, place);
             return Ok(Some(v));
         }
         if self.require_cached && index.is_some() {
@@ -235,7 +297,8 @@ impl Runner {
         if self.cancel.is_set() {
             return Err(UnitError::Interrupted);
         }
-        self.events.unit_started(id, &key);
+        let place = phase.as_ref().map(|p| p.unit_started(photons));
+        self.events.unit_started(id, &key, place);
         let t0 = std::time::Instant::now();
         let v = compute().map_err(|e| {
             if e.is::<crate::cancel::Cancelled>() {
@@ -249,8 +312,9 @@ impl Runner {
             .map_err(|e| UnitError::Failed(e.context(format!("caching unit {id}"))))?;
         self.computed.fetch_add(1, Relaxed);
         self.used.lock().unwrap().push((id.to_string(), key));
+        let place = phase.as_ref().map(|p| p.unit_done(photons, false));
         self.events
-            .unit_finished(id, &key, t0.elapsed().as_secs_f64(), photons);
+            .unit_finished(id, &key, t0.elapsed().as_secs_f64(), photons, place);
         Ok(Some(v))
     }
 }

@@ -29,6 +29,23 @@ pub fn rgb_profile(
     gaussians: usize,
     cancel: Cancel,
 ) -> Result<RgbProfile, Cancelled> {
+    rgb_profile_with(
+        p,
+        colour,
+        &GaussianFitOptions {
+            count: gaussians,
+            cancel,
+            ..GaussianFitOptions::default()
+        },
+    )
+}
+
+/// [`rgb_profile`] with the fit's options (`baker plan` times a shortened fit).
+pub fn rgb_profile_with(
+    p: &SpectralProfile,
+    colour: &ColourMap,
+    o: &GaussianFitOptions,
+) -> Result<RgbProfile, Cancelled> {
     let nr = p.r_edges_mm.len() - 1;
     let w = &colour.rgb_weights;
     let rd_rgb: Vec<[f64; 3]> = (0..nr)
@@ -50,16 +67,7 @@ pub fn rgb_profile(
     });
     // Where the grid ends before 99 %, fit what there is (the bake warns).
     let r_fit = r99_mm.map(|r| if r.is_nan() { f64::INFINITY } else { r });
-    let fit = fit_sum_of_gaussians(
-        &p.r_edges_mm,
-        &rd_rgb,
-        r_fit,
-        &GaussianFitOptions {
-            count: gaussians,
-            cancel,
-            ..GaussianFitOptions::default()
-        },
-    )?;
+    let fit = fit_sum_of_gaussians(&p.r_edges_mm, &rd_rgb, r_fit, o)?;
     Ok(RgbProfile {
         xyz: colour.xyz(&p.rd_total),
         albedo_rgb,

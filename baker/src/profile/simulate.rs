@@ -162,7 +162,7 @@ pub struct SkinUnits {
     pub pilot_photons: u64,
 }
 
-fn stack_and_sets(
+pub fn stack_and_sets(
     entries: &[OpticsEntry],
     plan: &GroupPlan,
     g: usize,
@@ -339,7 +339,7 @@ pub fn simulate_units(
 }
 
 /// A profile on `bins` at every wavelength of `lambda_nm`, all zero.
-fn empty_profile(lambda_nm: &[f64], bins: &RadialBins) -> SpectralProfile {
+pub fn empty_profile(lambda_nm: &[f64], bins: &RadialBins) -> SpectralProfile {
     let (nl, nr) = (lambda_nm.len(), bins.len());
     SpectralProfile {
         lambda_nm: lambda_nm.to_vec(),
@@ -359,7 +359,7 @@ fn empty_profile(lambda_nm: &[f64], bins: &RadialBins) -> SpectralProfile {
 
 /// Stores absorption set `t` of group `g`'s run at wavelength index `i` in profile `p`: the
 /// means over the run's photons, Rd(r) per unit area of each annulus (of area `areas`, mm²).
-fn store_run(
+pub fn store_run(
     p: &mut SpectralProfile,
     g: usize,
     i: usize,
@@ -384,7 +384,7 @@ fn store_run(
 
 /// Packets of each pilot run: 2.5 % of `photons` (at most 100,000) for a noise target, whose
 /// pilots estimate per-bin variances; 1 % (at most 20,000) for a boost, which counts events.
-fn pilot_photons(o: &SimOptions) -> u64 {
+pub fn pilot_photons(o: &SimOptions) -> u64 {
     if o.noise.is_some() {
         (o.photons / 40)
             .clamp(2_000, NOISE_PILOT_MAX)
@@ -432,7 +432,7 @@ fn photon_counts(
     for i in 0..nl {
         let id = unit_id(prefix, "pilot/", g, lambda_nm[i]);
         let run = runner
-            .unit(&id, units.pilot[g][i], None, pilot, || {
+            .side_unit(&id, units.pilot[g][i], pilot, || {
                 let (stack, sets) = stack_and_sets(entries, plan, g, i);
                 let mut mo = McOptions::new(
                     pilot,

@@ -16,7 +16,7 @@ use crate::fiber::slices::{self as bake, incident_of_bin, unit_len, BakeSettings
 use crate::fiber::Fiber;
 use crate::math::rng::coordinate_seed;
 use crate::output::{atomic, hdf5 as h5out};
-use crate::pipeline::Bar;
+use crate::progress::Progress;
 use crate::spec::fiber::{FiberEntry, FiberSpec};
 use formats::bcsdf::{self, KIND};
 
@@ -94,7 +94,7 @@ impl EntryBake<'_> {
         &self,
         u: usize,
         chunk: &[usize],
-        bar: Option<&dyn Bar>,
+        bar: Option<&dyn Progress>,
     ) -> anyhow::Result<Option<Vec<Vec<bake::SliceResult>>>> {
         let (s, st, runner) = (&self.setup, self.st, self.job.runner);
         let (id, key) = unit_id_key(&self.prefix, chunk, &s.stored, &s.key_base);
@@ -131,11 +131,30 @@ impl EntryBake<'_> {
 
     /// A shard traces its units into the cache; `baker merge` writes the tables.
     fn units_only(&self) -> anyhow::Result<()> {
+        let phase = self.begin_phase();
         let all: Vec<usize> = (0..self.setup.stored.len()).collect();
-        for (u, chunk) in all.chunks(unit_len(all.len())).enumerate() {
-            self.unit_results(u, chunk, None)?;
-        }
-        Ok(())
+        let r = (|| {
+            for (u, chunk) in all.chunks(unit_len(all.len())).enumerate() {
+                self.unit_results(u, chunk, Some(&*phase))?;
+            }
+            Ok(())
+        })();
+        self.job.runner.end_phase();
+        r
+    }
+
+    /// The entry's `tracing` phase: its units, photons and directions.
+    fn begin_phase(&self) -> std::sync::Arc<crate::pipeline::Phase> {
+        let (s, st) = (&self.setup, self.st);
+        let per_unit = unit_len(s.stored.len()).min(s.stored.len()) * s.fibers.len();
+        self.job.runner.begin_phase(crate::pipeline::PhaseSpec {
+            name: "tracing".into(),
+            label: self.e.name.clone(),
+            units: self.n_units() as u64,
+            photons_per_unit: per_unit as u64 * st.photons,
+            photons_per_item: Some(st.photons),
+            item: "directions".into(),
+        })
     }
 }
 
@@ -330,20 +349,28 @@ fn table_metadata(eb: &EntryBake, name: &str, t: usize) -> serde_json::Value {
 /// Runs the entry's units in order and pushes every stored direction into the tables (the
 /// sections, then their average weighted by the power each intercepts).
 fn trace_into(eb: &EntryBake, outs: &mut [TableOut], tallies: &mut Tallies) -> anyhow::Result<()> {
+    let runner = eb.job.runner;
+    let phase = eb.begin_phase();
+    let r = trace_units(eb, &phase, outs, tallies);
+    runner.end_phase();
+    r
+}
+
+/// [`trace_into`]'s loop over the units, reporting to `phase`.
+fn trace_units(
+    eb: &EntryBake,
+    phase: &crate::pipeline::Phase,
+    outs: &mut [TableOut],
+    tallies: &mut Tallies,
+) -> anyhow::Result<()> {
     let (s, runner) = (&eb.setup, eb.job.runner);
-    let (ns, n_wi) = (s.fibers.len(), s.stored.len());
+    let n_wi = s.stored.len();
     let nc = s.channels.per_variant();
-    let bar = runner.events.bar((n_wi * ns) as u64, &eb.e.name);
-    let mut done = 0usize;
-    let t_trace = Instant::now();
     let all: Vec<usize> = (0..n_wi).collect();
     for (u, chunk) in all.chunks(unit_len(n_wi)).enumerate() {
         let results = eb
-            .unit_results(u, chunk, bar.as_deref())?
+            .unit_results(u, chunk, Some(phase))?
             .ok_or_else(|| anyhow::anyhow!("unit {} of {} is not available", u, eb.e.name))?;
-        if let Some(bar) = &bar {
-            bar.set_position(((done + chunk.len()) * ns) as u64);
-        }
         for (&i, res) in chunk.iter().zip(results) {
             // Encoding and writing a direction of a wide sweep takes a while: a signal
             // stops here too (the HDF5 file being written is dropped).
@@ -363,21 +390,6 @@ fn trace_into(eb: &EntryBake, outs: &mut [TableOut], tallies: &mut Tallies) -> a
                 }
             }
         }
-        done += chunk.len();
-        if bar.is_none() {
-            let step = (n_wi / 10).max(1);
-            if done % step < chunk.len() || done == n_wi {
-                let el = t_trace.elapsed().as_secs_f64();
-                runner.events.say(format!(
-                    "  {}: {done}/{n_wi} directions, {el:.0} s elapsed, eta {:.0} s",
-                    eb.e.name,
-                    el / done as f64 * (n_wi - done) as f64
-                ));
-            }
-        }
-    }
-    if let Some(b) = &bar {
-        b.finish();
     }
     Ok(())
 }

@@ -97,13 +97,56 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `baker plan`: the entry's units, numbered from `*unit_index`.
+/// `baker plan`'s calibration of entry `e`: seconds per photon on one thread, from a few
+/// photons traced at stored directions spread over the entry's (section 0), and the
+/// seconds the calibration took.
+pub fn calibrate_entry(e: &FiberEntry, st: &BakeSettings) -> anyhow::Result<(f64, f64)> {
+    let t0 = Instant::now();
+    let setup = entry_setup(e, st)?;
+    let n_wi = setup.stored.len();
+    let picks: Vec<usize> = [0, n_wi / 2, n_wi.saturating_sub(1)].into();
+    let (mut photons, mut seconds) = (0u64, 0.0);
+    for &i in &picks {
+        let b = setup.stored[i];
+        let inc = crate::fiber::slices::incident_of_bin(
+            &setup.grid,
+            b / setup.grid.n_phi,
+            b % setup.grid.n_phi,
+        );
+        let mut cal = st.clone();
+        cal.photons = st.photons.min(4096);
+        loop {
+            let t = Instant::now();
+            let r = crate::fiber::slices::trace_slice(
+                &setup.fibers[0],
+                inc,
+                &setup.grid,
+                &setup.channels,
+                &cal,
+                st.seed ^ 0xca1b ^ b as u64,
+                &crate::cancel::Cancel::NEVER,
+            )?;
+            let s = t.elapsed().as_secs_f64();
+            if s >= 0.02 || cal.photons >= st.photons {
+                photons += r.launched;
+                seconds += s;
+                break;
+            }
+            cal.photons = (cal.photons * 4).min(st.photons);
+        }
+    }
+    Ok((seconds / photons.max(1) as f64, t0.elapsed().as_secs_f64()))
+}
+
+/// `baker plan`: the entry's units, numbered from `*unit_index`; with `cost` (seconds per
+/// photon on one thread, and the threads) their estimated seconds.
 pub fn plan_entry(
     stem: &str,
     e: &FiberEntry,
     st: &BakeSettings,
     cache: &Cache,
     unit_index: &mut usize,
+    cost: Option<(f64, usize)>,
 ) -> anyhow::Result<Vec<UnitInfo>> {
     let setup = entry_setup(e, st)?;
     let n_wi = setup.stored.len();
@@ -112,12 +155,24 @@ pub fn plan_entry(
     for chunk in all.chunks(unit_len(n_wi)) {
         let prefix = format!("{stem}/{}", e.name);
         let (id, key) = setup::unit_id_key(&prefix, chunk, &setup.stored, &setup.key_base);
+        let cached = cache.path(&key).exists();
+        let traced = (chunk.len() * setup.fibers.len()) as u64 * st.photons_per_direction();
         out.push(UnitInfo {
             id,
             key: key.hex(),
             index: Some(*unit_index),
             photons: (chunk.len() * setup.fibers.len()) as u64 * st.photons,
-            cached: cache.path(&key).exists(),
+            cached,
+            kind: "fiber",
+            // A unit traces its directions in parallel (the sections of each in turn).
+            estimate_s: cost.map(|(c, threads)| {
+                let usable = chunk.len().clamp(1, threads.max(1));
+                if cached {
+                    0.0
+                } else {
+                    traced as f64 * c / usable as f64
+                }
+            }),
         });
         *unit_index += 1;
     }

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use super::manifest::{self, Kind, Manifest, Timing};
 use crate::bake::job::Job;
 use crate::output::{self, atomic, manifest::file_entry};
-use crate::pipeline::events::reporter;
+use crate::pipeline::PhaseSpec;
 use crate::profile::{self, RgbProfile, SimOptions, SpectralProfile};
 use crate::spec::{ResolvedEntry, SkinSpec};
 use crate::spectral::ColourMap;
@@ -152,14 +152,21 @@ fn profiles(
         plan.groups.len(),
         lam.len()
     ));
-    let bar = runner.events.bar(n_sims as u64 * photons, "");
+    let phase = runner.begin_phase(PhaseSpec {
+        name: "simulation".into(),
+        label: "simulation".into(),
+        units: n_sims as u64,
+        photons_per_unit: photons,
+        photons_per_item: Some(1),
+        item: "photons".into(),
+    });
     let sim = SimOptions {
         photons,
         seed: settings.seed,
         threads: a.threads,
         max_boost: settings.max_photon_boost,
         noise: profile::NoiseTarget::new(settings.noise_target, photons),
-        progress: reporter(&bar),
+        progress: Some(phase as std::sync::Arc<dyn crate::progress::Progress>),
     };
     let t_sim = Instant::now();
     let prefix = format!("{}/skin", job.stem);
@@ -173,25 +180,10 @@ fn profiles(
         },
         runner,
         &prefix,
-        |done, total, _| {
-            if let Some(b) = &bar {
-                b.set_message(&format!("simulation {done}/{total}"));
-            } else {
-                // Pipelines (stderr not a terminal) get a line every ~5 % instead of a bar.
-                let step = (total / 20).max(1);
-                if done % step == 0 || done == total {
-                    let el = t_sim.elapsed().as_secs_f64();
-                    let eta = el / done as f64 * (total - done) as f64;
-                    runner.events.say(format!(
-                        "  simulation {done}/{total}, {el:.0} s elapsed, eta {eta:.0} s"
-                    ));
-                }
-            }
-        },
-    )?;
-    if let Some(b) = &bar {
-        b.finish();
-    }
+        |_, _, _| {},
+    );
+    runner.end_phase();
+    let spectral = spectral?;
     let Some(spectral) = spectral.filter(|_| job.out.is_some()) else {
         // A shard: its units are cached; `baker merge` assembles.
         return Ok(None);
@@ -222,15 +214,20 @@ fn fits(
 ) -> anyhow::Result<Vec<RgbProfile>> {
     let runner = job.runner;
     let gaussians = spec.profiles.gaussians;
-    spectral
+    runner.begin_phase(PhaseSpec {
+        name: "fitting".into(),
+        label: "fitting".into(),
+        units: entries.len() as u64,
+        photons_per_unit: 0,
+        photons_per_item: None,
+        item: "profiles".into(),
+    });
+    let r = spectral
         .par_iter()
         .zip(entries)
         .map(|(p, e)| {
-            let key = crate::pipeline::KeyBuilder::new("skin-fit", crate::data::checksum())
-                .part("profile", p)
-                .part("gaussians", &gaussians)
-                .finish();
-            let id = format!("{}/fit/{}", job.stem, e.name);
+            let key = fit_key(p, gaussians);
+            let id = fit_id(job.stem, &e.name);
             runner
                 .unit(&id, key, None, 0, || {
                     Ok(profile::rgb_profile(p, colour, gaussians, runner.cancel)?)
@@ -238,7 +235,22 @@ fn fits(
                 .map_err(anyhow::Error::from)
                 .map(|r| r.expect("fit units are never sharded"))
         })
-        .collect()
+        .collect();
+    runner.end_phase();
+    r
+}
+
+/// The key of the Gaussian fit of spectral profile `p` with `gaussians` Gaussians.
+pub fn fit_key(p: &SpectralProfile, gaussians: usize) -> crate::pipeline::Key {
+    crate::pipeline::KeyBuilder::new("skin-fit", crate::data::checksum())
+        .part("profile", p)
+        .part("gaussians", &gaussians)
+        .finish()
+}
+
+/// The id of entry `name`'s fit unit: `<spec>/fit/<entry>`.
+pub fn fit_id(stem: &str, name: &str) -> String {
+    format!("{stem}/fit/{name}")
 }
 
 /// A warning per entry and channel whose profile holds less than 99 % of its energy within
