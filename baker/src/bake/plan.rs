@@ -245,12 +245,13 @@ impl Report {
         self.units.iter().filter(|u| u.kind == kind).count()
     }
 
-    /// The table of units and its summary line.
-    pub fn table(&self) -> String {
+    /// The plan as text: one line per unit (with `rows`), then the totals and the estimate.
+    pub fn table(&self, rows: bool) -> String {
         use crate::progress::{duration, grouped, si};
         use std::fmt::Write as _;
         let mut s = String::new();
         let est = self.calibration_s.is_some();
+        let units: &[UnitInfo] = if rows { &self.units } else { &[] };
         let _ = writeln!(
             s,
             "{:<56} {:<9} {:>7} {:>14} {:<6}{}",
@@ -261,7 +262,7 @@ impl Report {
             "cached",
             if est { "  estimate" } else { "" }
         );
-        for u in &self.units {
+        for u in units {
             let e = u.estimate_s.map_or(String::new(), |e| {
                 format!("  {:>8}", if u.cached { "-".into() } else { duration(e) })
             });

@@ -32,6 +32,9 @@ pub struct PlanArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Print only the totals and the time estimate, not one line per unit.
+    #[arg(short, long)]
+    pub quiet: bool,
     /// Skip the time estimate (a calibration run of about a second per spec).
     #[arg(long)]
     pub no_estimate: bool,
@@ -87,7 +90,7 @@ pub fn run(p: PlanArgs) -> anyhow::Result<()> {
         )?;
         return Ok(());
     }
-    outln!("{}", report.table())?;
+    outln!("{}", report.table(!p.quiet))?;
     outln!("cache {}", cache.dir.display())?;
     for (path, c, l) in &costs {
         outln!(
