@@ -234,9 +234,11 @@ fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
                 .find(|s| s.0 == other)
                 .map(|s| s.1)
                 .ok_or_else(|| {
+                    let names: Vec<&str> = Shape::ALL.iter().map(|s| s.0).collect();
                     usage(format!(
-                        "--section {other:?}: expected circle, ellipse:RATIO, polygon:FILE.csv, mask:FILE.png:UM_PER_PX or one of {}",
-                        Shape::ALL.iter().map(|s| s.0).collect::<Vec<_>>().join(", ")
+                        "--section {other:?}: expected circle, ellipse:RATIO, polygon:FILE.csv, mask:FILE.png:UM_PER_PX or one of {}{}",
+                        names.join(", "),
+                        crate::suggest::suffix(other, &names)
                     ))
                 })?;
             generate(shape, diameter.unwrap_or(10.0), a.seed, a.variant)?
@@ -285,15 +287,8 @@ fn fiber_of(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
                 .as_deref()
                 .ok_or_else(|| usage("--entry NAME is required with a spec"))?;
             let e = s.fibers.iter().find(|f| f.name == name).ok_or_else(|| {
-                usage(format!(
-                    "{}: no fiber entry {name:?}; entries: {}",
-                    spec.display(),
-                    s.fibers
-                        .iter()
-                        .map(|f| f.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ))
+                let names: Vec<&str> = s.fibers.iter().map(|f| f.name.as_str()).collect();
+                usage(crate::spec::names::unknown_entry(&s.file, name, &names))
             })?;
             let mua = a.mua_per_um.unwrap_or_else(|| e.mua_per_um(a.lambda_nm));
             Ok((e.fiber(), mua, e.name.clone()))

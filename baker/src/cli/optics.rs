@@ -49,13 +49,8 @@ pub fn evaluate_entries(
         .collect();
     if selected.is_empty() {
         let names: Vec<&str> = spec.entries.iter().map(|e| e.name.as_str()).collect();
-        return Err(UsageError(format!(
-            "{}: no entry named {:?}; entries: {}",
-            spec.file,
-            only.unwrap_or(""),
-            names.join(", ")
-        ))
-        .into());
+        let name = only.unwrap_or("");
+        return Err(UsageError(crate::spec::names::unknown_entry(&spec.file, name, &names)).into());
     }
     Ok(crate::bake::skin::optics_of(spec, |e| {
         only.is_none_or(|n| e.name == n)

@@ -47,8 +47,13 @@ pub fn run(p: PlanArgs) -> anyhow::Result<()> {
     let cache = crate::pipeline::Cache::new(req.cache_dir(), crate::pipeline::CacheMode::Use);
     let mut units = Vec::new();
     let mut costs = Vec::new();
-    for path in &p.specs {
-        let (spec, cost) = bake::load_checked(path, &o)?;
+    let loaded = p
+        .specs
+        .iter()
+        .map(|path| bake::load_checked(path, &o))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    bake::check_entries(&req, loaded.iter().map(|(s, _)| s))?;
+    for (path, (spec, cost)) in p.specs.iter().zip(loaded) {
         let stem = bake::spec_stem(path)?;
         units.extend(bake::plan::plan_units(&spec, &stem, &req, &cache)?);
         costs.push((path.clone(), cost, *spec.limits()));

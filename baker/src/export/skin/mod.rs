@@ -35,7 +35,6 @@ use anyhow::Context as _;
 use formats::{ProfileTable, TableIndex};
 
 use super::{Export, ExportRequest};
-use crate::error::UsageError;
 
 pub mod blender;
 pub mod burley_json;
@@ -94,6 +93,11 @@ impl Target {
         }
     }
 
+    /// Every `--to` name, in [`Target::ALL`] order.
+    pub fn names() -> [&'static str; 7] {
+        Target::ALL.map(Target::name)
+    }
+
     pub fn parse(s: &str) -> Option<Target> {
         Target::ALL.into_iter().find(|t| t.name() == s)
     }
@@ -107,12 +111,18 @@ pub const DEFAULT_ETA: f64 = 1.4;
 /// target's document (nothing is written to disk here; see [`Export`]).
 pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
     let target = Target::parse(&req.to).ok_or_else(|| {
-        let names: Vec<&str> = Target::ALL.iter().map(|t| t.name()).collect();
-        UsageError(format!(
-            "--to {:?} is not a skin export target; allowed: {}",
-            req.to,
-            names.join(", ")
-        ))
+        let names = Target::names();
+        let skin = super::TableKind {
+            name: "skin",
+            file: "profiles.bkt",
+            targets: &names,
+        };
+        let fiber = super::TableKind {
+            name: "fiber",
+            file: ".bcsdf",
+            targets: &super::FIBER_TARGETS,
+        };
+        super::unknown_target(req, &skin, &fiber)
     })?;
     let (table, index) = read_table(req)?;
     let names = select_entries(&table, req)?;
@@ -170,12 +180,7 @@ fn select_entries(table: &ProfileTable, req: &ExportRequest) -> anyhow::Result<V
         Some(e) if table.position(e).is_some() => vec![e.clone()],
         Some(e) => {
             let all: Vec<&str> = table.entries().iter().map(|x| x.name.as_str()).collect();
-            return Err(UsageError(format!(
-                "--entry {e:?} is not in {}; allowed: {}",
-                req.table.display(),
-                all.join(", ")
-            ))
-            .into());
+            return Err(super::unknown_entry(req, ("entry", "entries"), e, &all).into());
         }
         None => table.entries().iter().map(|x| x.name.clone()).collect(),
     })

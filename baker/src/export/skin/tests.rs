@@ -4,6 +4,7 @@ use serde_json::{json, Value};
 
 use super::format::{identifiers, num, nums};
 use super::*;
+use crate::error::UsageError;
 use crate::export::burley::{self, burley_energy, volume_mfp_mm, BurleyFit};
 use crate::export::xml::xml_comment;
 use crate::transport::RadialBins;

@@ -244,10 +244,24 @@ impl SkinCx {
                     loc(item),
                     "freeze",
                     format!("{other:?}"),
-                    "thickness, melanin, hemoglobin, surface, collagen, junction".into(),
+                    format!(
+                        "{}{}",
+                        FREEZE.join(", "),
+                        crate::suggest::suffix(other, &FREEZE)
+                    ),
                 ),
             }
         }
         f
     }
 }
+
+/// What `freeze:` may hold.
+const FREEZE: [&str; 6] = [
+    "thickness",
+    "melanin",
+    "hemoglobin",
+    "surface",
+    "collagen",
+    "junction",
+];
