@@ -4,7 +4,8 @@
 //!
 //! - ground floor: [`math`] (rng and seeding, quadrature, Fresnel), [`progress`] and
 //!   [`cancel`] (how long work reports and stops), [`files`] (bounded reads), [`data`] (the
-//!   checksum of the compiled data tables), [`error`] (exit codes);
+//!   checksum of the compiled data tables), [`error`] (exit codes), [`suggest`] ("did you
+//!   mean …?");
 //! - generic machinery: [`output`] (atomic writers, paths inside `--out`, HDF5, `.bkt`, EXR,
 //!   PNG) and [`pipeline`] (work units, cache, events, interruption, shards);
 //! - physics: [`spectral`] (wavelength grids, measured spectra, colour), [`stats`], [`fit`]
@@ -33,4 +34,5 @@ pub mod skin;
 pub mod spec;
 pub mod spectral;
 pub mod stats;
+pub mod suggest;
 pub mod transport;

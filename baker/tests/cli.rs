@@ -37,7 +37,7 @@ fn typo_names_the_unknown_field_and_its_line() {
         "tests/specs/bad/typo.yaml",
         &[
             "tests/specs/bad/typo.yaml:3:5",
-            "unknown field `agee`",
+            "agee: unknown field; did you mean \"age\"?",
             "age",
         ],
     );
@@ -186,7 +186,7 @@ fn mci_off_grid_wavelength_is_a_clear_error() {
 }
 
 #[test]
-fn unknown_entry_lists_the_entries() {
+fn unknown_entry_suggests_the_nearest_entries_not_all_109() {
     let o = baker(&[
         "optics",
         "tests/specs/optics_examples.yaml",
@@ -194,7 +194,21 @@ fn unknown_entry_lists_the_entries() {
         "nobody",
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("fig35_female_type2_age30"));
+    let e = stderr(&o);
+    assert!(e.contains("none of the 109 entries is close"), "{e}");
+    assert!(!e.contains("fig35_female_type2_age30"), "{e}");
+    let o = baker(&[
+        "optics",
+        "tests/specs/optics_examples.yaml",
+        "--entry",
+        "fig35_female_type2_age3",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("did you mean \"fig35_female_type2_age30\"? (109 entries;"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -406,6 +406,106 @@ fn bake_writes_every_product_identically_for_any_thread_count() {
     assert_eq!(sheets, 2, "one contact sheet per ξ");
 }
 
+/// Every `attribute NAME` a dataset's description of `g` names, checked to exist; returns
+/// how many were checked.
+fn referenced_attributes_exist(g: &hdf5_metno::Group) -> usize {
+    let mut n = 0;
+    for d in g.datasets().unwrap() {
+        let desc: hdf5_metno::types::VarLenUnicode =
+            d.attr("description").unwrap().read_scalar().unwrap();
+        let desc = desc.as_str().to_string();
+        for (_, rest) in desc
+            .match_indices("attribute ")
+            .map(|(i, _)| desc.split_at(i + 10))
+        {
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            assert!(
+                d.attr_names().unwrap().contains(&name),
+                "{}: the description {desc:?} names attribute {name:?}, which it lacks",
+                d.name()
+            );
+            n += 1;
+        }
+    }
+    for sub in g.groups().unwrap() {
+        n += referenced_attributes_exist(&sub);
+    }
+    n
+}
+
+#[test]
+fn skin_bake_writes_timing_and_the_attributes_its_descriptions_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = baker(&[
+        "bake",
+        "tests/specs/profiles_small.yaml",
+        "--entry",
+        "typeVI_age80_xi1",
+        "--photons",
+        "2000",
+        "--threads",
+        "1",
+        "--quiet",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a = dir.path().join("profiles_small");
+    // profiles.h5: `optics/d_mm` names its layers in attribute `layers`, one per layer.
+    let f = hdf5_metno::File::open(a.join("profiles.h5")).unwrap();
+    assert!(referenced_attributes_exist(&f.group("/").unwrap()) >= 1);
+    let d = f.dataset("typeVI_age80_xi1/optics/d_mm").unwrap();
+    let layers: Vec<hdf5_metno::types::VarLenUnicode> =
+        d.attr("layers").unwrap().read_raw().unwrap();
+    let layers: Vec<&str> = layers.iter().map(|s| s.as_str()).collect();
+    assert_eq!(layers.len(), d.size());
+    assert_eq!(layers.first(), Some(&"stratum corneum"));
+    assert_eq!(layers.last(), Some(&"hypodermis"));
+    let t = formats::table::TableFile::read(a.join("profiles.bkt")).unwrap();
+    assert_eq!(
+        t.get("typeVI_age80_xi1/optics/d_mm")
+            .unwrap()
+            .attr("layers"),
+        Some(layers.join(",").as_str())
+    );
+    // timing.json: wall seconds per phase, threads and photons, outside the manifest.
+    let timing: serde_json::Value = serde_json::from_slice(&read(&a.join("timing.json"))).unwrap();
+    let total = timing["seconds"].as_f64().unwrap();
+    for phase in ["optics", "transport", "fits", "writing"] {
+        let s = timing[format!("{phase}_seconds")].as_f64();
+        assert!(
+            s.is_some_and(|s| s >= 0.0 && s <= total),
+            "{phase}: {timing}"
+        );
+    }
+    assert_eq!(timing["threads"], 1, "{timing}");
+    // One entry, one simulation group: the packets its table records per wavelength.
+    let traced: f64 = t
+        .get("typeVI_age80_xi1/photons_spectral")
+        .unwrap()
+        .as_f64()
+        .unwrap()
+        .iter()
+        .sum();
+    assert!(traced > 0.0);
+    assert_eq!(timing["photons"].as_f64(), Some(traced), "{timing}");
+    let m: serde_json::Value = serde_json::from_slice(&read(&a.join("manifest.json"))).unwrap();
+    let files: Vec<&str> = m["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["path"].as_str().unwrap())
+        .collect();
+    assert!(!files.contains(&"timing.json"), "{files:?}");
+    assert!(
+        !m.to_string().contains("seconds"),
+        "wall-clock time in the manifest"
+    );
+}
+
 #[test]
 fn bake_subset_and_unknown_entry() {
     let dir = tempfile::tempdir().unwrap();

@@ -42,11 +42,17 @@ pub struct Manifest {
     pub warnings: Vec<String>,
 }
 
-/// This run's wall-clock figures.
+/// This run's wall-clock figures: `timing.json`, `{"seconds", "threads", "photons",
+/// "<phase>_seconds"…, "entries", "note"}` (formats/FORMAT.md).
 pub struct Timing {
     pub seconds: f64,
-    /// Per phase (e.g. `simulation`, `fits`), seconds.
+    /// Per phase, seconds: skin `optics`, `transport`, `fits`, `writing` (`optics` only for
+    /// `--optics-only`); fiber bakes time each entry instead.
     pub phases: Vec<(&'static str, f64)>,
+    /// Worker threads of the bake.
+    pub threads: usize,
+    /// Photon packets of the baked tables (cached units included; 0 for optics only).
+    pub photons: u64,
     /// Per entry, as the kind measures it.
     pub entries: Vec<serde_json::Value>,
 }
@@ -73,6 +79,8 @@ pub fn write(job: &Job, m: Manifest, t: Timing) -> anyhow::Result<()> {
     }
     let mut timing = serde_json::json!({
         "seconds": t.seconds,
+        "threads": t.threads,
+        "photons": t.photons,
         "entries": t.entries,
         "note": "this run's wall-clock time; units taken from the cache cost nothing",
     });

@@ -115,23 +115,27 @@ fn check_kind_flags(req: &Request, specs: &[Spec], events: &Events) -> anyhow::R
 }
 
 /// With several specs an entry may live in any of them; each name asked for must exist.
-pub fn check_entries(req: &Request, specs: &[Spec]) -> anyhow::Result<()> {
+pub fn check_entries<'a>(
+    req: &Request,
+    specs: impl IntoIterator<Item = &'a Spec>,
+) -> anyhow::Result<()> {
     let names: Vec<&str> = specs
-        .iter()
+        .into_iter()
         .flat_map(|s| s.entries().into_iter().map(|(n, _)| n))
         .collect();
     for name in &req.entries {
         if !names.contains(&name.as_str()) {
-            return Err(UsageError(format!(
-                "{}: no entry named {name:?}; entries: {}",
-                req.specs
-                    .iter()
-                    .map(|p| p.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                names.join(", ")
-            ))
-            .into());
+            let files: Vec<String> = req.specs.iter().map(|p| p.display().to_string()).collect();
+            let message = match files.as_slice() {
+                [one] => crate::spec::names::unknown_entry(one, name, &names),
+                _ => crate::suggest::no_entry(
+                    name,
+                    &files.join(", "),
+                    &names,
+                    "`baker validate SPEC` lists each spec's",
+                ),
+            };
+            return Err(UsageError(message).into());
         }
     }
     Ok(())

@@ -18,10 +18,10 @@ pub struct ExportArgs {
     /// Fiber: chiang, pbrt, mitsuba, blender.
     #[arg(long = "to")]
     pub to: String,
-    /// Skin entry (default: all, where the target takes several) or fiber variant (default:
-    /// the first).
-    #[arg(long)]
-    pub entry: Option<String>,
+    /// Skin entry to export (repeatable; default: every entry) or fiber dye variant (one;
+    /// default: the first).
+    #[arg(long = "entry", value_name = "NAME")]
+    pub entries: Vec<String>,
     /// Output file, written atomically (default, or `-`: standard output).
     #[arg(short = 'o', long = "out", alias = "output", value_name = "FILE")]
     pub output: Option<PathBuf>,
@@ -34,7 +34,7 @@ pub fn run(a: ExportArgs) -> anyhow::Result<()> {
     let req = ExportRequest {
         table: a.table,
         to: a.to,
-        entry: a.entry,
+        entries: a.entries,
     };
     let head = read_head(&req.table)?;
     let export = if head == formats::table::MAGIC {
@@ -120,7 +120,7 @@ mod tests {
             let e = run(ExportArgs {
                 table: table.clone(),
                 to: to.into(),
-                entry: entry.map(str::to_string),
+                entries: entry.map(str::to_string).into_iter().collect(),
                 output: Some(out.clone()),
                 quiet: true,
             })

@@ -145,10 +145,11 @@ fn bench_cases(a: &FiberBenchArgs) -> anyhow::Result<Vec<(String, Fiber, f64)>> 
         }
     }
     if let Some(missing) = a.entries.iter().find(|n| !found.contains(n)) {
-        return Err(usage(format!(
-            "no fiber entry {missing:?} in {}; entries: {}",
-            shown_list(&a.specs),
-            found.join(", ")
+        let names: Vec<&str> = found.iter().map(String::as_str).collect();
+        return Err(usage(crate::spec::names::unknown_entry(
+            &shown_list(&a.specs),
+            missing,
+            &names,
         )));
     }
     Ok(cases)
@@ -281,9 +282,11 @@ fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
                 .find(|s| s.0 == other)
                 .map(|s| s.1)
                 .ok_or_else(|| {
+                    let names: Vec<&str> = Shape::ALL.iter().map(|s| s.0).collect();
                     usage(format!(
-                        "--section {other:?}: expected circle, ellipse:RATIO, polygon:FILE.csv, mask:FILE.png:UM_PER_PX or one of {}",
-                        Shape::ALL.iter().map(|s| s.0).collect::<Vec<_>>().join(", ")
+                        "--section {other:?}: expected circle, ellipse:RATIO, polygon:FILE.csv, mask:FILE.png:UM_PER_PX or one of {}{}",
+                        names.join(", "),
+                        crate::suggest::suffix(other, &names)
                     ))
                 })?;
             generate(shape, diameter.unwrap_or(10.0), a.seed, a.variant)?
@@ -339,14 +342,11 @@ fn fibers_of(a: &TraceArgs) -> anyhow::Result<Vec<(Fiber, f64, String)>> {
         .iter()
         .map(|name| {
             let e = fibers.iter().find(|f| &f.name == name).ok_or_else(|| {
-                usage(format!(
-                    "no fiber entry {name:?} in {}; entries: {}",
-                    shown_list(&a.specs),
-                    fibers
-                        .iter()
-                        .map(|f| f.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                let names: Vec<&str> = fibers.iter().map(|f| f.name.as_str()).collect();
+                usage(crate::spec::names::unknown_entry(
+                    &shown_list(&a.specs),
+                    name,
+                    &names,
                 ))
             })?;
             let mua = a.mua_per_um.unwrap_or_else(|| e.mua_per_um(a.lambda_nm));

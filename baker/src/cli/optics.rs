@@ -53,12 +53,9 @@ pub fn evaluate_entries(
     let names: Vec<&str> = spec.entries.iter().map(|e| e.name.as_str()).collect();
     for name in only {
         if !names.contains(&name.as_str()) {
-            return Err(UsageError(format!(
-                "{}: no entry named {name:?}; entries: {}",
-                spec.file,
-                names.join(", ")
-            ))
-            .into());
+            return Err(
+                UsageError(crate::spec::names::unknown_entry(&spec.file, name, &names)).into(),
+            );
         }
     }
     let selects = |n: &str| only.is_empty() || only.iter().any(|o| o == n);
@@ -67,28 +64,28 @@ pub fn evaluate_entries(
 
 pub fn run(a: OpticsArgs) -> anyhow::Result<()> {
     // Every spec and entry name is checked before anything is written.
-    let mut loaded = Vec::new();
-    for path in &a.specs {
-        let spec = load_spec(path)?;
-        if a.entries.is_empty() || spec.entries.iter().any(|e| a.entries.contains(&e.name)) {
-            loaded.push(spec);
-        }
+    let all = a
+        .specs
+        .iter()
+        .map(|p| load_spec(p))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let names: Vec<&str> = (all.iter())
+        .flat_map(|s| s.entries.iter().map(|e| e.name.as_str()))
+        .collect();
+    if let Some(missing) = a.entries.iter().find(|n| !names.contains(&n.as_str())) {
+        let files: Vec<&str> = all.iter().map(|s| s.file.as_str()).collect();
+        let msg = crate::spec::names::unknown_entry(&files.join(", "), missing, &names);
+        return Err(UsageError(msg).into());
     }
-    let known = |n: &String| {
-        loaded
-            .iter()
-            .any(|s| s.entries.iter().any(|e| &e.name == n))
-    };
-    if let Some(missing) = a.entries.iter().find(|n| !known(n)) {
-        let spec = load_spec(&a.specs[0])?;
-        evaluate_entries(&spec, std::slice::from_ref(missing))?;
-    }
-    for spec in &loaded {
+    let loaded: Vec<&SkinSpec> = (all.iter())
+        .filter(|s| a.entries.is_empty() || s.entries.iter().any(|e| a.entries.contains(&e.name)))
+        .collect();
+    for spec in loaded.iter().copied() {
         if let Some(lambda) = a.mci {
             wavelength_index(spec, lambda, "--mci")?;
         }
     }
-    for spec in &loaded {
+    for spec in loaded {
         let here: Vec<String> = (a.entries.iter())
             .filter(|n| spec.entries.iter().any(|e| &e.name == *n))
             .cloned()

@@ -61,8 +61,13 @@ pub fn run(p: PlanArgs) -> anyhow::Result<()> {
         threads: req.thread_count(),
     };
     let mut costs = Vec::new();
-    for path in &p.specs {
-        let (spec, cost) = bake::load_checked(path, &o)?;
+    let loaded = p
+        .specs
+        .iter()
+        .map(|path| bake::load_checked(path, &o))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    bake::check_entries(&req, loaded.iter().map(|(s, _)| s))?;
+    for (path, (spec, cost)) in p.specs.iter().zip(loaded) {
         let stem = bake::spec_stem(path)?;
         let plan = bake::plan::plan_units(&spec, &stem, &req, &cache, !p.no_estimate)?;
         report.units.extend(plan.units);

@@ -16,18 +16,20 @@ pub mod fiber;
 pub mod skin;
 mod xml;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-/// What `baker export` was asked: the table, the target and an optional entry (skin entry or
-/// fiber variant).
+use crate::error::UsageError;
+
+/// What `baker export` was asked: the table, the target and the entries (skin entries, or one
+/// fiber variant; none: every skin entry, the first variant).
 #[derive(Debug, Clone)]
 pub struct ExportRequest {
     /// The baked table (`profiles.bkt` or a `.bcsdf`).
     pub table: PathBuf,
     /// Target format name as given on the command line (`burley`, `mtlx`, `pbrt`, …).
     pub to: String,
-    /// Skin entry or fiber variant; `None` = every entry (skin) or the first variant (fiber).
-    pub entry: Option<String>,
+    /// Skin entries or one fiber variant; empty = every entry (skin) or the first variant.
+    pub entries: Vec<String>,
 }
 
 /// The result of an export: the document and the messages that go with it.
@@ -43,4 +45,143 @@ pub struct Export {
     /// What the document holds ("3 entries"), for the line printed after it was written to a
     /// file: `baker export: {written} → FILE (TARGET)` (skin exports).
     pub written: Option<String>,
+}
+
+/// The `--to` values of fiber tables.
+pub const FIBER_TARGETS: [&str; 4] = ["chiang", "pbrt", "mitsuba", "blender"];
+
+/// The tables of one kind: its name, what its file is, and its `--to` values.
+pub(crate) struct TableKind<'a> {
+    pub name: &'a str,
+    pub file: &'a str,
+    pub targets: &'a [&'a str],
+}
+
+/// `--to` naming no target of `this` kind of table: a target of the `other` kind only is
+/// named as such; otherwise the nearest targets ([`crate::suggest`]) and the list.
+pub(crate) fn unknown_target(
+    req: &ExportRequest,
+    this: &TableKind,
+    other: &TableKind,
+) -> UsageError {
+    let to = &req.to;
+    let table = req.table.display();
+    if other.targets.contains(&to.as_str()) {
+        return UsageError(format!(
+            "--to {to:?} is a {} export target, and {table} is a {} table ({}); {} targets: {}",
+            other.name,
+            this.name,
+            this.file,
+            this.name,
+            this.targets.join(", ")
+        ));
+    }
+    UsageError(format!(
+        "--to {to:?} is not a {} export target; {}",
+        this.name,
+        crate::suggest::advice(to, this.targets, "targets", "")
+    ))
+}
+
+/// `--entry` naming no entry (skin, `what` = ("entry", "entries")) or variant (fiber) of the
+/// table: the nearest names and, for a long list, the manifest that lists them.
+pub(crate) fn unknown_entry(
+    req: &ExportRequest,
+    what: (&str, &str),
+    name: &str,
+    names: &[&str],
+) -> UsageError {
+    let listed_by = match manifest_near(&req.table) {
+        Some(m) => format!("{} lists them", m.display()),
+        None => "the bake's manifest.json lists them".to_string(),
+    };
+    UsageError(format!(
+        "no {} named {name:?} in {}; {}",
+        what.0,
+        req.table.display(),
+        crate::suggest::advice(name, names, what.1, &listed_by)
+    ))
+}
+
+/// The `manifest.json` of the bake that wrote `table`: beside it (skin) or one folder up
+/// (fiber tables lie in `<entry>/`).
+fn manifest_near(table: &Path) -> Option<PathBuf> {
+    table
+        .ancestors()
+        .skip(1)
+        .take(2)
+        .map(|d| d.join("manifest.json"))
+        .find(|m| m.is_file())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn req(table: &str, to: &str) -> ExportRequest {
+        ExportRequest {
+            table: PathBuf::from(table),
+            to: to.into(),
+            entries: Vec::new(),
+        }
+    }
+
+    fn message(r: anyhow::Result<Export>) -> String {
+        let e = r.unwrap_err();
+        e.downcast_ref::<UsageError>()
+            .unwrap_or_else(|| panic!("not a usage error: {e:#}"))
+            .0
+            .clone()
+    }
+
+    #[test]
+    fn misspelt_and_mismatched_targets() {
+        // The target is checked before the table is read: no table is needed.
+        let m = message(skin::export(&req("p.bkt", "blendr")));
+        assert!(m.contains("did you mean \"blender\"?"), "{m}");
+        let m = message(skin::export(&req("p.bkt", "chiang")));
+        assert!(
+            m.contains("\"chiang\" is a fiber export target, and p.bkt is a skin table"),
+            "{m}"
+        );
+        assert!(m.contains("skin targets: burley, mtlx, blender"), "{m}");
+        let m = message(fiber::export(&req("a.bcsdf", "burley")));
+        assert!(m.contains("\"burley\" is a skin export target"), "{m}");
+        assert!(
+            m.contains("fiber targets: chiang, pbrt, mitsuba, blender"),
+            "{m}"
+        );
+        let m = message(fiber::export(&req("a.bcsdf", "chaing")));
+        assert!(m.contains("did you mean \"chiang\"?"), "{m}");
+        // A target of both kinds is no mismatch.
+        let m = message(fiber::export(&req("a.bcsdf", "pbrtv4")));
+        assert!(
+            m.contains("not a fiber export target; did you mean \"pbrt\"?"),
+            "{m}"
+        );
+    }
+
+    #[test]
+    fn a_misspelt_entry_of_a_large_table_is_not_answered_with_every_name() {
+        let names: Vec<String> = (0..40).map(|i| format!("dye{i}@1%")).collect();
+        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        let m = unknown_entry(
+            &req("/nowhere/a.bcsdf", "chiang"),
+            ("variant", "variants"),
+            "dye17@1 %",
+            &refs,
+        )
+        .0;
+        assert!(
+            m.starts_with(
+                "no variant named \"dye17@1 %\" in /nowhere/a.bcsdf; did you mean \"dye17@1%\""
+            ),
+            "{m}"
+        );
+        assert!(
+            m.contains("(40 variants; the bake's manifest.json lists them)"),
+            "{m}"
+        );
+        assert!(!m.contains("dye39@1%"), "{m}");
+    }
 }

@@ -39,6 +39,10 @@ pub fn to_table_file(t: &Tables) -> anyhow::Result<TableFile> {
             .map_err(|e| anyhow::anyhow!("{}/{}: {e}", g.name, d.name))?
             .with_attr("units", d.units)
             .with_attr("description", d.description);
+            let a = match &d.labels {
+                Some(l) => a.with_attr(l.attr, l.names.join(",")),
+                None => a,
+            };
             f.push(a).map_err(|e| anyhow::anyhow!("{e}"))?;
         }
     }

@@ -71,6 +71,17 @@ fn write_dataset(g: &h5::Group, d: &Dataset) -> anyhow::Result<h5::Dataset> {
     };
     text_attr(&ds, "units", d.units)?;
     text_attr(&ds, "description", d.description)?;
+    if let Some(l) = &d.labels {
+        let v: Vec<VarLenUnicode> = l
+            .names
+            .iter()
+            .map(|s| VarLenUnicode::from_str(s).map_err(|e| anyhow::anyhow!("{}: {e}", l.attr)))
+            .collect::<anyhow::Result<_>>()?;
+        ds.new_attr::<VarLenUnicode>()
+            .shape([v.len()])
+            .create(l.attr)?
+            .write(&v)?;
+    }
     Ok(ds)
 }
 

@@ -12,6 +12,18 @@ pub struct Dataset {
     pub description: &'static str,
     /// Per dimension, the dataset of the same group that is its scale (HDF5 dimension scale).
     pub dims: Vec<Option<&'static str>>,
+    /// Names of the elements along the first dimension, as an attribute of that name (e.g.
+    /// `layers` on `optics/d_mm`): HDF5 writes an array of strings, `.bkt` the names joined
+    /// by `,`.
+    pub labels: Option<Labels>,
+}
+
+/// Names of a dataset's elements along its first dimension.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Labels {
+    /// The attribute's name.
+    pub attr: &'static str,
+    pub names: Vec<String>,
 }
 
 /// An attribute value: HDF5 writes a scalar string, f64 or u64 attribute; `.bkt` a JSON

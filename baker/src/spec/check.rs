@@ -287,13 +287,30 @@ impl Ctx {
             return Some(*t);
         }
         let allowed: Vec<&str> = options.iter().map(|o| o.0).collect();
-        self.out_of_range(
-            loc(v),
-            field,
-            format!("{:?}", v.value),
-            format!("one of {}", allowed.join(", ")),
-        );
+        self.unknown_name(field, v, &allowed, "");
         None
+    }
+
+    /// Records that `v` is none of `allowed`: the nearest names ([`crate::suggest`]) and the
+    /// list when it is short or `listed_by` is empty (a choice of the spec language), else its
+    /// length and `listed_by` (where to see it).
+    pub(super) fn unknown_name(
+        &mut self,
+        field: &str,
+        v: &Spanned<String>,
+        allowed: &[&str],
+        listed_by: &str,
+    ) {
+        let advice = if allowed.len() <= crate::suggest::LIST_AT_MOST || listed_by.is_empty() {
+            format!(
+                "one of {}{}",
+                allowed.join(", "),
+                crate::suggest::suffix(&v.value, allowed)
+            )
+        } else {
+            crate::suggest::advice(&v.value, allowed, "names", listed_by)
+        };
+        self.out_of_range(loc(v), field, format!("{:?}", v.value), advice);
     }
 
     /// Records that `what` (computed from the value at `at`) is over limit `name`.

@@ -62,6 +62,18 @@ pub fn message(name: &str, problem: &str) -> String {
     format!("{name:?} {problem}; allowed: {ALLOWED}")
 }
 
+/// The message for `--entry NAME` naming no entry of the spec `file` (entries `names`): the
+/// nearest names ([`crate::suggest`]) and, for a long list, its length and the command that
+/// lists it, never the whole list.
+pub fn unknown_entry(file: &str, name: &str, names: &[&str]) -> String {
+    crate::suggest::no_entry(
+        name,
+        file,
+        names,
+        &format!("`baker validate {file}` lists them"),
+    )
+}
+
 /// Checks a spec file's stem, which names its output folder `OUT/<stem>/`. Looser than entry
 /// names (the user chose the file name, spaces and Unicode are fine) but never a path trick:
 /// not empty, no leading dot (`.cache`, `..`), no separator or control character.

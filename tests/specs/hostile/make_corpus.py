@@ -264,7 +264,7 @@ case("kind_comments_only", "# nothing but a comment\n", 2, ["is empty"])
 case("kind_scalar", "42\n", 2, ["mapping"])
 case("kind_list", f"- {E}\n", 2, ["mapping"])
 case("kind_only_version", "version: 1\n", 2, ["has no entries or fibers"])
-case("kind_typo_fibers", "fiber:\n  - {name: a, type: silk}\n", 2, ["unknown field `fiber`"])
+case("kind_typo_fibers", "fiber:\n  - {name: a, type: silk}\n", 2, ["fiber: unknown field; did you mean \"fibers\"?"])
 
 # --- special paths given as the spec ------------------------------------------------------------
 case("path_dev_zero", None, 2, ["/dev/zero", "over the limit"], spec="/dev/zero", no_line=True)

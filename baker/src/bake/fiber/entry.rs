@@ -38,6 +38,9 @@ pub struct EntryReport {
     pub seconds: f64,
     #[serde(skip)]
     pub photons_per_s: f64,
+    /// Photons launched for this entry's tables (units taken from the cache included).
+    #[serde(skip)]
+    pub photons: u64,
     /// Mean over stored directions of each slice's median / 90th-percentile per-bin relative
     /// standard error (section 0).
     pub noise: Noise,
@@ -503,6 +506,7 @@ fn report(
         channels: s.channels.channel_names.clone(),
         seconds,
         photons_per_s: t.photons as f64 / seconds,
+        photons: t.photons,
         noise: Noise {
             median_rel_se: t.noise.0 / n,
             p90_rel_se: t.noise.1 / n,

@@ -60,7 +60,7 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
     for e in selected() {
         if let Some((r, f)) = entry::bake_entry(job, spec, e, &settings, &mut unit_index)? {
             timing.push(serde_json::json!({"entry": r.name, "seconds": r.seconds,
-                "photons_per_s": r.photons_per_s}));
+                "photons": r.photons, "photons_per_s": r.photons_per_s}));
             reports.push(r);
             files.extend(f);
         }
@@ -84,6 +84,8 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
     let t = Timing {
         seconds: t0.elapsed().as_secs_f64(),
         phases: vec![],
+        threads: a.thread_count(),
+        photons: reports.iter().map(|r| r.photons).sum(),
         entries: timing,
     };
     manifest::write(job, m, t)?;

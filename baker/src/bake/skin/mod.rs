@@ -63,6 +63,7 @@ pub fn bake(job: &Job, spec: &SkinSpec) -> anyhow::Result<()> {
     if job.out.is_some() {
         write_optics(job, &spec.file, lam, &entries)?;
     }
+    let optics_seconds = t0.elapsed().as_secs_f64();
     if a.optics_only {
         job.runner.events.say(format!(
             "baked {} (optics only): {} entries × {} wavelengths → {} ({:.2} s)",
@@ -72,7 +73,7 @@ pub fn bake(job: &Job, spec: &SkinSpec) -> anyhow::Result<()> {
             job.shown().display(),
             t0.elapsed().as_secs_f64()
         ));
-        return write_manifest_optics_only(job, spec, &entries, t0);
+        return write_manifest_optics_only(job, spec, &entries, (t0, optics_seconds));
     }
     // A shard only computes work units; `baker merge` writes every product.
     let Some(p) = profiles(job, spec, &entries)? else {
@@ -82,9 +83,14 @@ pub fn bake(job: &Job, spec: &SkinSpec) -> anyhow::Result<()> {
     for w in &warnings {
         job.runner.events.warn(w);
     }
+    let clock = Clock {
+        t0,
+        optics_seconds,
+        writing: Instant::now(),
+    };
     write_tables(job, spec, &entries, &p)?;
     let previews = preview::write(job, &entries, &p.rgb, &p.bins)?;
-    write_manifest(job, spec, &entries, &p, previews, warnings, t0)?;
+    write_manifest(job, spec, &entries, &p, (previews, warnings), clock)?;
     if job.runner.events.human() {
         summary::print(
             job,
@@ -298,15 +304,32 @@ fn write_tables(
     )
 }
 
-/// The manifest of a profile bake, and its timing.
+/// When a profile bake started, how long its optics took and when it started writing its
+/// tables.
+struct Clock {
+    t0: Instant,
+    optics_seconds: f64,
+    writing: Instant,
+}
+
+/// Total photon packets of the profiles of `p` (one count per simulation group), cached or
+/// traced.
+fn total_photons(p: &Profiles) -> u64 {
+    p.plan
+        .groups
+        .iter()
+        .map(|g| p.spectral[g[0]].photons.iter().sum::<u64>())
+        .sum()
+}
+
+/// The manifest of a profile bake (its previews and warnings), and its timing.
 fn write_manifest(
     job: &Job,
     spec: &SkinSpec,
     entries: &[formats::OpticsEntry],
     p: &Profiles,
-    previews: Vec<String>,
-    warnings: Vec<String>,
-    t0: Instant,
+    (previews, warnings): (Vec<String>, Vec<String>),
+    clock: Clock,
 ) -> anyhow::Result<()> {
     let dir = job.out.expect("a shard has returned").staged.dir();
     let mut files = vec![
@@ -366,8 +389,15 @@ fn write_manifest(
         warnings,
     };
     let t = Timing {
-        seconds: t0.elapsed().as_secs_f64(),
-        phases: vec![("simulation", p.sim_seconds), ("fits", p.fit_seconds)],
+        seconds: clock.t0.elapsed().as_secs_f64(),
+        phases: vec![
+            ("optics", clock.optics_seconds),
+            ("transport", p.sim_seconds),
+            ("fits", p.fit_seconds),
+            ("writing", clock.writing.elapsed().as_secs_f64()),
+        ],
+        threads: job.req.thread_count(),
+        photons: total_photons(p),
         entries: vec![],
     };
     manifest::write(job, m, t)
@@ -378,7 +408,7 @@ fn write_manifest_optics_only(
     job: &Job,
     spec: &SkinSpec,
     entries: &[formats::OpticsEntry],
-    t0: Instant,
+    (t0, optics_seconds): (Instant, f64),
 ) -> anyhow::Result<()> {
     let Some(d) = job.out else { return Ok(()) };
     let dir = d.staged.dir();
@@ -410,7 +440,9 @@ fn write_manifest_optics_only(
     };
     let t = Timing {
         seconds: t0.elapsed().as_secs_f64(),
-        phases: vec![],
+        phases: vec![("optics", optics_seconds)],
+        threads: job.req.thread_count(),
+        photons: 0,
         entries: vec![],
     };
     manifest::write(job, m, t)

@@ -4,7 +4,7 @@
 use formats::OpticsEntry;
 
 use crate::bake::request::Request;
-use crate::output::tables::{Attr, Dataset, Group, Tables};
+use crate::output::tables::{Attr, Dataset, Group, Labels, Tables};
 use crate::profile::{RgbProfile, SpectralProfile};
 use crate::spec::SkinSpec;
 use crate::spectral::ColourMap;
@@ -109,6 +109,7 @@ fn ds(
         units,
         description,
         dims,
+        labels: None,
     }
 }
 
@@ -385,14 +386,20 @@ fn fit_datasets(rgb: &RgbProfile) -> Vec<Dataset> {
 fn optics_datasets(e: &OpticsEntry, nl: usize) -> Vec<Dataset> {
     let mut d = Vec::new();
     let nlay = e.layers.len();
-    d.push(ds(
-        "optics/d_mm",
-        vec![nlay],
-        e.layers.iter().map(|l| l.d_mm).collect(),
-        "mm",
-        "layer thicknesses, top to bottom (names: attribute layers)",
-        vec![None],
-    ));
+    d.push(Dataset {
+        labels: Some(Labels {
+            attr: "layers",
+            names: e.layers.iter().map(|l| l.name.clone()).collect(),
+        }),
+        ..ds(
+            "optics/d_mm",
+            vec![nlay],
+            e.layers.iter().map(|l| l.d_mm).collect(),
+            "mm",
+            "layer thicknesses, top to bottom (names: attribute layers)",
+            vec![None],
+        )
+    });
     d.push(ds(
         "optics/eta",
         vec![nlay],

@@ -59,17 +59,24 @@ pub use mitsuba::write_mitsuba;
 pub use pbrt::write_pbrt;
 
 /// The `--to` values of fiber tables.
-pub const TARGETS: [&str; 4] = ["chiang", "pbrt", "mitsuba", "blender"];
+pub use super::FIBER_TARGETS as TARGETS;
 
 /// Exports a fiber table: reads and checks it, fits the variant and writes the target's
 /// document (nothing is written to disk here; see [`Export`]).
 pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
     let target = TARGETS.into_iter().find(|t| *t == req.to).ok_or_else(|| {
-        UsageError(format!(
-            "unknown fiber export target {:?}; allowed: {}",
-            req.to,
-            TARGETS.join(", ")
-        ))
+        let skin_names = super::skin::Target::names();
+        let fiber = super::TableKind {
+            name: "fiber",
+            file: ".bcsdf",
+            targets: &TARGETS,
+        };
+        let skin = super::TableKind {
+            name: "skin",
+            file: "profiles.bkt",
+            targets: &skin_names,
+        };
+        super::unknown_target(req, &fiber, &skin)
     })?;
     let table =
         Bcsdf::open(&req.table).with_context(|| format!("reading {}", req.table.display()))?;
@@ -111,15 +118,19 @@ pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
 /// The variant to export: `--entry` by name, else the first.
 fn select_variant(table: &Bcsdf, req: &ExportRequest) -> Result<usize, UsageError> {
     let variants = &table.dir.variants;
-    match &req.entry {
-        None => Ok(0),
-        Some(name) => variants.iter().position(|v| v == name).ok_or_else(|| {
-            UsageError(format!(
-                "{}: no variant {name:?}; allowed: {}",
-                req.table.display(),
-                variants.join(", ")
-            ))
+    match req.entries.as_slice() {
+        [] => Ok(0),
+        [name] => variants.iter().position(|v| v == name).ok_or_else(|| {
+            let names: Vec<&str> = variants.iter().map(String::as_str).collect();
+            super::unknown_entry(req, ("variant", "variants"), name, &names)
         }),
+        several => Err(UsageError(format!(
+            "{}: a fiber export is one dye variant's fit; --entry was given {} times ({}): \
+             export each variant to its own file",
+            req.table.display(),
+            several.len(),
+            several.join(", ")
+        ))),
     }
 }
 

@@ -35,7 +35,6 @@ use anyhow::Context as _;
 use formats::{ProfileTable, TableIndex};
 
 use super::{Export, ExportRequest};
-use crate::error::UsageError;
 
 pub mod blender;
 pub mod burley_json;
@@ -94,6 +93,11 @@ impl Target {
         }
     }
 
+    /// Every `--to` name, in [`Target::ALL`] order.
+    pub fn names() -> [&'static str; 7] {
+        Target::ALL.map(Target::name)
+    }
+
     pub fn parse(s: &str) -> Option<Target> {
         Target::ALL.into_iter().find(|t| t.name() == s)
     }
@@ -107,12 +111,18 @@ pub const DEFAULT_ETA: f64 = 1.4;
 /// target's document (nothing is written to disk here; see [`Export`]).
 pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
     let target = Target::parse(&req.to).ok_or_else(|| {
-        let names: Vec<&str> = Target::ALL.iter().map(|t| t.name()).collect();
-        UsageError(format!(
-            "--to {:?} is not a skin export target; allowed: {}",
-            req.to,
-            names.join(", ")
-        ))
+        let names = Target::names();
+        let skin = super::TableKind {
+            name: "skin",
+            file: "profiles.bkt",
+            targets: &names,
+        };
+        let fiber = super::TableKind {
+            name: "fiber",
+            file: ".bcsdf",
+            targets: &super::FIBER_TARGETS,
+        };
+        super::unknown_target(req, &skin, &fiber)
     })?;
     let (table, index) = read_table(req)?;
     let names = select_entries(&table, req)?;
@@ -164,21 +174,17 @@ fn read_table(req: &ExportRequest) -> anyhow::Result<(ProfileTable, TableIndex)>
     Ok((table, index))
 }
 
-/// The entries to export: `--entry` if the table has it, else every entry.
+/// The entries to export: each `--entry` (in the order given; each must be in the table), or
+/// every entry.
 fn select_entries(table: &ProfileTable, req: &ExportRequest) -> anyhow::Result<Vec<String>> {
-    Ok(match &req.entry {
-        Some(e) if table.position(e).is_some() => vec![e.clone()],
-        Some(e) => {
-            let all: Vec<&str> = table.entries().iter().map(|x| x.name.as_str()).collect();
-            return Err(UsageError(format!(
-                "--entry {e:?} is not in {}; allowed: {}",
-                req.table.display(),
-                all.join(", ")
-            ))
-            .into());
-        }
-        None => table.entries().iter().map(|x| x.name.clone()).collect(),
-    })
+    if req.entries.is_empty() {
+        return Ok(table.entries().iter().map(|x| x.name.clone()).collect());
+    }
+    if let Some(e) = req.entries.iter().find(|e| table.position(e).is_none()) {
+        let all: Vec<&str> = table.entries().iter().map(|x| x.name.as_str()).collect();
+        return Err(super::unknown_entry(req, ("entry", "entries"), e, &all).into());
+    }
+    Ok(req.entries.clone())
 }
 
 /// The document of `target` for `fits`.

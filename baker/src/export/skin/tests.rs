@@ -4,6 +4,7 @@ use serde_json::{json, Value};
 
 use super::format::{identifiers, num, nums};
 use super::*;
+use crate::error::UsageError;
 use crate::export::burley::{self, burley_energy, volume_mfp_mm, BurleyFit};
 use crate::export::xml::xml_comment;
 use crate::transport::RadialBins;
@@ -66,7 +67,7 @@ fn request(table: &std::path::Path, to: &str, entry: Option<&str>) -> ExportRequ
     ExportRequest {
         table: table.to_path_buf(),
         to: to.into(),
-        entry: entry.map(str::to_string),
+        entries: entry.map(str::to_string).into_iter().collect(),
     }
 }
 

@@ -158,11 +158,11 @@ impl FiberCx {
             return None;
         }
         let names: Vec<&str> = sc.dyes.iter().map(|d| d.name.as_str()).collect();
-        self.out_of_range(
-            loc(name),
+        self.unknown_name(
             field,
-            format!("{:?}", name.value),
-            format!("one of {}", names.join(", ")),
+            name,
+            &names,
+            "the presets (baker/src/fiber/data/dye_presets.csv) and the spec's `dyes:` list them",
         );
         None
     }

@@ -275,7 +275,11 @@ impl SkinCx {
                     loc(item),
                     "freeze",
                     format!("{:?}", item.value),
-                    FREEZABLE.map(|(k, _)| k).join(", "),
+                    format!(
+                        "{}{}",
+                        FREEZABLE.map(|(k, _)| k).join(", "),
+                        crate::suggest::suffix(&item.value, &FREEZABLE.map(|(k, _)| k))
+                    ),
                 ),
             }
         }

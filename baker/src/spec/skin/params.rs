@@ -124,11 +124,15 @@ impl SkinCx {
             Token::Number(_) => None,
         };
         if found.is_none() {
+            let near = match &t.value {
+                Token::Text(s) => crate::suggest::suffix(s, &SkinType::ALL.map(|k| k.roman())),
+                Token::Number(_) => String::new(),
+            };
             self.out_of_range(
                 loc(t),
                 "skin_type",
                 t.value.to_string(),
-                "one of I, II, III, IV, V, VI (or 1–6)".into(),
+                format!("one of I, II, III, IV, V, VI (or 1–6){near}"),
             );
         }
         found

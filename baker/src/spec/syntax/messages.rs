@@ -92,3 +92,29 @@ fn humane(m: &str) -> String {
     }
     m.to_string()
 }
+
+/// serde's "unknown field `x`, expected one of a, b, …" as the field (`field`, else the
+/// name in the message), the nearest known fields ([`crate::suggest`]) and, for a long list,
+/// its length and `reference` (where the fields are documented) instead of the list.
+pub(super) fn unknown_field(m: &str, field: Option<String>, reference: &str) -> Option<String> {
+    let rest = m.strip_prefix("unknown field `")?;
+    let (name, rest) = rest.split_once('`')?;
+    let known: Vec<&str> = rest
+        .split_once("expected ")
+        .map_or("", |(_, k)| k)
+        .trim_start_matches("one of ")
+        .split(", ")
+        .flat_map(|k| k.split(" or "))
+        .map(|k| k.trim().trim_matches('`'))
+        .filter(|k| !k.is_empty())
+        .collect();
+    let field = field.unwrap_or_else(|| name.to_string());
+    if known.is_empty() {
+        return Some(format!("{field}: unknown field; this map takes no fields"));
+    }
+    let listed_by = format!("{reference} lists them");
+    Some(format!(
+        "{field}: unknown field; {}",
+        crate::suggest::advice(name, &known, "fields here", &listed_by)
+    ))
+}

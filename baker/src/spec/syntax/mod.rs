@@ -113,6 +113,9 @@ pub(super) fn diagnose(
             format!("{}: missing{allowed}", display(&path)),
         );
     }
+    if let Some(u) = messages::unknown_field(&m, doc.field(line, column), reference(text)) {
+        return at(line, column, u);
+    }
     if m.contains("unknown field") {
         return at(line, column, m);
     }
@@ -177,6 +180,14 @@ fn is_type_error(m: &str) -> bool {
     ]
     .iter()
     .any(|p| m.contains(p))
+}
+
+/// Where the fields of a spec of the kind `text` is are documented.
+fn reference(text: &str) -> &'static str {
+    match super::kind::detect("", text) {
+        Ok(super::SpecKind::Fiber) => "README.md, \"Fibers: `baker fiber trace`\",",
+        _ => "README.md, \"The skin spec language\",",
+    }
 }
 
 fn missing_field(m: &str) -> Option<&str> {
