@@ -5,6 +5,8 @@
 //! Pipes and character devices are read as streams, so `baker validate <(generate-spec)` works;
 //! the size bound stops a device that never ends (`/dev/zero`) after `max_bytes`.
 
+pub mod csv_rows;
+
 use std::fmt;
 use std::io::Read as _;
 use std::path::{Path, PathBuf};

@@ -992,36 +992,12 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>, TableError> {
     std::fs::read(path).map_err(io)
 }
 
-/// Lookup table of [`crc32`].
-const CRC32_TABLE: [u32; 256] = {
-    let mut table = [0u32; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = i as u32;
-        let mut k = 0;
-        while k < 8 {
-            c = if c & 1 != 0 {
-                0xEDB8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-            k += 1;
-        }
-        table[i] = c;
-        i += 1;
-    }
-    table
-};
-
 /// CRC-32 as in zlib, PNG and Python's `zlib.crc32` (IEEE 802.3 polynomial, reflected
 /// `0xEDB88320`, initial value and final xor `0xFFFFFFFF`); `crc32(b"123456789")` is
-/// `0xCBF43926`.
+/// `0xCBF43926`. A thin wrapper of [`crc32fast`], so that every caller (the baker, the C API,
+/// the Python module) names one function.
 pub fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c = CRC32_TABLE[((c ^ b as u32) & 0xFF) as usize] ^ (c >> 8);
-    }
-    !c
+    crc32fast::hash(bytes)
 }
 
 #[cfg(test)]
@@ -1096,6 +1072,32 @@ mod tests {
     fn crc32_check_value() {
         assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
         assert_eq!(crc32(b""), 0);
+        assert_eq!(
+            crc32(b"The quick brown fox jumps over the lazy dog"),
+            0x414F_A339
+        );
+        // Against the bitwise definition (the hand-written table this replaced), on lengths
+        // that cross crc32fast's SIMD block sizes.
+        let bitwise = |bytes: &[u8]| {
+            let mut c = !0u32;
+            for &b in bytes {
+                c ^= b as u32;
+                for _ in 0..8 {
+                    c = if c & 1 != 0 {
+                        0xEDB8_8320 ^ (c >> 1)
+                    } else {
+                        c >> 1
+                    };
+                }
+            }
+            !c
+        };
+        let data: Vec<u8> = (0..5000u32)
+            .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+            .collect();
+        for n in [1, 15, 16, 63, 64, 65, 127, 128, 1000, 4099, 5000] {
+            assert_eq!(crc32(&data[..n]), bitwise(&data[..n]), "{n} bytes");
+        }
     }
 
     #[test]

@@ -125,31 +125,21 @@ pub const DATA_FILES: &[(&str, &str)] = &[("dye_presets.csv", PRESETS_CSV)];
 
 /// The shipped dye presets (`data/dye_presets.csv`, sources in its header).
 pub fn presets() -> Vec<Dye> {
-    let mut sources: Vec<(String, String)> = Vec::new();
+    // The sources are comment lines `# source[n]: text`; the rest is CSV, one row per band.
+    let sources: Vec<(String, String)> = PRESETS_CSV
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("# source[")?.split_once("]:"))
+        .map(|(n, text)| (n.trim().to_string(), text.trim().to_string()))
+        .collect();
     let mut dyes: Vec<Dye> = Vec::new();
     let mut header: Option<Vec<String>> = None;
-    for line in PRESETS_CSV.lines() {
-        let line = line.trim();
-        if let Some(rest) = line.strip_prefix("# source[") {
-            if let Some((n, text)) = rest.split_once("]:") {
-                sources.push((n.trim().to_string(), text.trim().to_string()));
-            }
-            continue;
-        }
-        if line.starts_with('#') || line.is_empty() {
-            continue;
-        }
-        let cols: Vec<&str> = line.split(',').map(str::trim).collect();
+    for row in crate::files::csv_rows::rows(PRESETS_CSV) {
+        let row = row.expect("data/dye_presets.csv splits into rows");
         let Some(h) = &header else {
-            header = Some(cols.iter().map(|s| s.to_string()).collect());
+            header = Some(row.fields.iter().map(str::to_string).collect());
             continue;
         };
-        let get = |k: &str| -> &str {
-            h.iter()
-                .position(|c| c == k)
-                .and_then(|i| cols.get(i).copied())
-                .unwrap_or("")
-        };
+        let get = |k: &str| -> &str { h.iter().position(|c| c == k).map_or("", |i| row.get(i)) };
         let num = |k: &str| get(k).parse::<f64>().unwrap_or(f64::NAN);
         let band = Band {
             peak_nm: num("peak_nm"),
@@ -187,43 +177,58 @@ pub fn presets() -> Vec<Dye> {
     dyes
 }
 
-/// Reads a tabulated spectrum: rows `lambda_nm,eps_l_per_mg_cm`, `#` comments and one header
-/// row allowed, wavelengths strictly increasing, ε ≥ 0.
+/// Most rows of a dye spectrum CSV (a 0.1 nm grid over 300–2500 nm has 22,001), checked
+/// before a row is stored.
+pub const MAX_SPECTRUM_ROWS: usize = 100_000;
+
+/// Reads a tabulated spectrum: rows `lambda_nm,eps_l_per_mg_cm` (the dialect of
+/// [`crate::files::csv_rows`]), `#` comments and header rows before the first data row
+/// allowed, wavelengths strictly increasing, ε ≥ 0, at most [`MAX_SPECTRUM_ROWS`] rows.
+/// Messages start `line N:` (the caller names the file).
 pub fn spectrum_from_csv(path: &Path) -> Result<Spectrum, String> {
+    const EXPECTED: &str = "expected two numbers `lambda_nm,eps_l_per_mg_cm`";
     let text = crate::files::read_text(path, crate::files::MAX_DATA_BYTES, "a dye spectrum CSV")
         .map_err(|e| e.to_string())?;
     let (mut l, mut e) = (Vec::new(), Vec::new());
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let c: Vec<&str> = line.split(',').map(str::trim).collect();
-        match (
-            c.first().and_then(|x| x.parse::<f64>().ok()),
-            c.get(1).and_then(|x| x.parse::<f64>().ok()),
-        ) {
-            (Some(a), Some(b)) if c.len() == 2 => {
-                if !(a.is_finite() && b.is_finite() && b >= 0.0) {
-                    return Err(format!(
-                        "line {}: need a finite wavelength and ε ≥ 0",
-                        i + 1
-                    ));
-                }
-                if l.last().is_some_and(|&p| a <= p) {
-                    return Err(format!("line {}: wavelengths must increase", i + 1));
-                }
-                l.push(a);
-                e.push(b);
-            }
+    for row in crate::files::csv_rows::rows(&text) {
+        let row = row.map_err(|e| format!("line {}: {}", e.line, e.message))?;
+        let line = row.line;
+        let (a, b) = match (row.number(0, "lambda_nm"), row.number(1, "eps_l_per_mg_cm")) {
+            (Ok(a), Ok(b)) if row.len() == 2 => (a, b),
+            // Headers (and anything else) before the first data row.
             _ if l.is_empty() => continue,
-            _ => {
+            (Ok(_), Ok(_)) => {
                 return Err(format!(
-                    "line {}: expected `lambda_nm,eps_l_per_mg_cm`, got {line:?}",
-                    i + 1
+                    "line {line}: {EXPECTED}; got {} columns: {}",
+                    row.len(),
+                    row.text()
                 ))
             }
+            (Err(m), _) | (_, Err(m)) => return Err(format!("line {line}: {m}; {EXPECTED}")),
+        };
+        if !a.is_finite() {
+            return Err(format!(
+                "line {line}: column 1 (lambda_nm): need a finite wavelength, got {a}"
+            ));
         }
+        if !(b.is_finite() && b >= 0.0) {
+            return Err(format!(
+                "line {line}: column 2 (eps_l_per_mg_cm): need a finite ε ≥ 0, got {b}"
+            ));
+        }
+        if let Some(&p) = l.last().filter(|&&p| a <= p) {
+            return Err(format!(
+                "line {line}: column 1 (lambda_nm): wavelengths must increase ({a} after {p})"
+            ));
+        }
+        if l.len() >= MAX_SPECTRUM_ROWS {
+            return Err(format!(
+                "line {line}: more than {MAX_SPECTRUM_ROWS} rows, over the limit for a dye \
+                 spectrum"
+            ));
+        }
+        l.push(a);
+        e.push(b);
     }
     if l.len() < 2 {
         return Err("need at least two rows `lambda_nm,eps_l_per_mg_cm`".into());
@@ -243,6 +248,44 @@ mod tests {
         // Fig. 61: silk, ζ = 4 %, the reactive class's top ε = 0.0158 → 84.68 mm⁻¹.
         let mua = mua_per_mm(1.34, 0.04, 0.0158);
         assert!((mua - 84.688).abs() < 0.01, "{mua}");
+    }
+
+    #[test]
+    fn spectrum_csv_rows_and_malformed_rows() {
+        let dir = tempfile::tempdir().unwrap();
+        let read = |text: &str| {
+            let path = dir.path().join("d.csv");
+            std::fs::write(&path, text).unwrap();
+            spectrum_from_csv(&path)
+        };
+        let Spectrum::Table {
+            lambda_nm,
+            eps_l_per_mg_cm,
+        } = read("# dye\nlambda_nm,eps_l_per_mg_cm\n400, 0.01\n\n500 ,0.02\r\n").unwrap()
+        else {
+            panic!()
+        };
+        assert_eq!(
+            (lambda_nm, eps_l_per_mg_cm),
+            (vec![400.0, 500.0], vec![0.01, 0.02])
+        );
+        assert_eq!(
+            read("l,e\n400,0.01\n450,x\n").unwrap_err(),
+            "line 3: column 2 (eps_l_per_mg_cm): expected a number, got \"x\"; expected two \
+             numbers `lambda_nm,eps_l_per_mg_cm`"
+        );
+        assert_eq!(
+            read("400,0.01\n# c\n450,0.02,7\n").unwrap_err(),
+            "line 3: expected two numbers `lambda_nm,eps_l_per_mg_cm`; got 3 columns: \
+             \"450,0.02,7\""
+        );
+        assert_eq!(
+            read("400,0.01\n390,0.02\n").unwrap_err(),
+            "line 2: column 1 (lambda_nm): wavelengths must increase (390 after 400)"
+        );
+        assert!(read("400,0.01\n450,-1\n")
+            .unwrap_err()
+            .starts_with("line 2: column 2"));
     }
 
     #[test]

@@ -109,7 +109,9 @@ pub fn plot(path: &Path, lambda_nm: &[f64], e: &OpticsEntry, q: Quantity) -> any
     write_png(path, w, h, buf)
 }
 
-/// Encodes an RGB8 buffer of `w`×`h` pixels as PNG and writes it atomically.
+/// Encodes an RGB8 buffer of `w`×`h` pixels (what plotters draws with
+/// `BitMapBackend::with_buffer`) as PNG with `image` and writes it atomically: every PNG the
+/// baker writes goes through here.
 pub(crate) fn write_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> anyhow::Result<()> {
     let mut png = Vec::new();
     let img = image::RgbImage::from_raw(w, h, buf).expect("buffer size matches");

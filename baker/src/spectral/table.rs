@@ -26,37 +26,44 @@ pub struct SpectralTable {
 
 impl SpectralTable {
     /// Parses `text`: lines starting with `#` are the header (source, units); every other
-    /// non-empty line is `lambda_nm,v1,v2,…`; `column` picks the value column (1 = first after λ).
+    /// non-empty line is `lambda_nm,v1,v2,…` (the dialect of [`crate::files::csv_rows`]);
+    /// `column` picks the value column (1 = first after λ).
     pub fn parse_csv(name: &str, text: &str, column: usize) -> Result<Self, SpectralTableError> {
         let mut lambda_nm = Vec::new();
         let mut value = Vec::new();
-        for (i, raw) in text.lines().enumerate() {
-            let line = raw.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
+        for row in crate::files::csv_rows::rows(text) {
+            let row = row.map_err(|e| SpectralTableError::Parse {
+                file: name.to_string(),
+                line: e.line,
+                message: e.message,
+            })?;
             let err = |message: String| SpectralTableError::Parse {
                 file: name.to_string(),
-                line: i + 1,
+                line: row.line,
                 message,
             };
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-            if fields.len() <= column {
-                return Err(err(format!("expected at least {} columns", column + 1)));
+            if row.len() <= column {
+                return Err(err(format!(
+                    "expected at least {} columns (lambda_nm and value column {}), got {}",
+                    column + 1,
+                    column + 1,
+                    row.len()
+                )));
             }
-            let l: f64 = fields[0]
-                .parse()
-                .map_err(|_| err(format!("bad wavelength {:?}", fields[0])))?;
-            let v: f64 = fields[column]
-                .parse()
-                .map_err(|_| err(format!("bad value {:?}", fields[column])))?;
+            let l = row.number(0, "lambda_nm").map_err(err)?;
+            let v = row.number(column, "value").map_err(err)?;
             if let Some(&prev) = lambda_nm.last() {
                 if l <= prev {
-                    return Err(err(format!("wavelengths must increase ({l} after {prev})")));
+                    return Err(err(format!(
+                        "column 1 (lambda_nm): wavelengths must increase ({l} after {prev})"
+                    )));
                 }
             }
             if !v.is_finite() {
-                return Err(err(format!("non-finite value {v}")));
+                return Err(err(format!(
+                    "column {} (value): non-finite value {v}",
+                    column + 1
+                )));
             }
             lambda_nm.push(l);
             value.push(v);
@@ -111,5 +118,25 @@ mod tests {
     fn rejects_unsorted_rows_with_line_number() {
         let e = SpectralTable::parse_csv("t", "400,1\n390,2\n", 1).unwrap_err();
         assert!(e.to_string().contains("t:2"), "{e}");
+    }
+
+    #[test]
+    fn malformed_rows_name_line_and_column() {
+        let text = "# header\n400,1,10\n410,3\n";
+        let e = SpectralTable::parse_csv("t", text, 2).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t:3: expected at least 3 columns (lambda_nm and value column 3), got 2"
+        );
+        let e = SpectralTable::parse_csv("t", "# h\n\n400,1\n410,x\n", 1).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t:4: column 2 (value): expected a number, got \"x\""
+        );
+        let e = SpectralTable::parse_csv("t", "4OO,1\n", 1).unwrap_err();
+        assert!(
+            e.to_string().starts_with("t:1: column 1 (lambda_nm)"),
+            "{e}"
+        );
     }
 }

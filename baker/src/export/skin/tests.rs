@@ -184,9 +184,12 @@ fn engine_values_follow_the_stated_conventions() {
         let at = x.find(&format!("name=\"{name}\"")).unwrap();
         let v = &x[at..];
         let v = &v[v.find("value=\"").unwrap() + 7..];
-        v[..v.find('"').unwrap()]
-            .split(',')
-            .map(|t| t.trim().parse().unwrap())
+        let row = crate::files::csv_rows::rows(&v[..v.find('"').unwrap()])
+            .next()
+            .unwrap()
+            .unwrap();
+        (0..row.len())
+            .map(|i| row.number(i, name).unwrap())
             .collect()
     };
     let (radius, scale, colour) = (

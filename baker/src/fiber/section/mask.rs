@@ -71,7 +71,7 @@ pub fn from_mask(path: &Path, o: &MaskOptions) -> Result<(Section, MaskReport), 
     }
     let bytes = crate::files::read_bytes(path, crate::files::MAX_DATA_BYTES, "a mask image")
         .map_err(|e| err(e.to_string()))?;
-    let reader = image::io::Reader::new(std::io::Cursor::new(&bytes))
+    let reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
         .with_guessed_format()
         .map_err(|e| err(format!("cannot read image: {e}")))?;
     // The size its header declares, checked before a pixel is decoded (a 59 KB PNG can
@@ -86,10 +86,10 @@ pub fn from_mask(path: &Path, o: &MaskOptions) -> Result<(Section, MaskReport), 
             o.max_pixels
         )));
     }
-    let mut reader = image::io::Reader::new(std::io::Cursor::new(&bytes))
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
         .with_guessed_format()
         .map_err(|e| err(format!("cannot read image: {e}")))?;
-    let mut limits = image::io::Limits::default();
+    let mut limits = image::Limits::default();
     limits.max_image_width = Some(w);
     limits.max_image_height = Some(h);
     // Decoder buffers: the image at up to 16 bytes per pixel (RGBA f32), plus slack.

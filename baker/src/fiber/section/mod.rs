@@ -201,69 +201,75 @@ impl Section {
     }
 
     /// Reads a polygon CSV: rows `x_um,y_um`; a blank line or a row `hole` starts a hole; `#`
-    /// comments and a header row `x_um,y_um` (or `x,y`) are skipped. The outline is moved so
-    /// that its area centroid is on the fiber axis. At most `max_vertices` vertices; every
-    /// coordinate within ±[`MAX_COORD_UM`].
+    /// comments and a header row `x_um,y_um` (or `x,y`) are skipped (the dialect of
+    /// [`crate::files::csv_rows`]). The outline is moved so that its area centroid is on the
+    /// fiber axis. At most `max_vertices` vertices; every coordinate within ±[`MAX_COORD_UM`].
     pub fn from_csv(path: &Path, max_vertices: u64) -> Result<Self, SectionError> {
+        use crate::files::csv_rows;
         let file = path.display().to_string();
+        let csv_err = |line: usize, message: String| SectionError::Csv {
+            file: file.clone(),
+            line,
+            message,
+        };
         let text = crate::files::read_text(path, crate::files::MAX_DATA_BYTES, "a polygon CSV")
-            .map_err(|e| SectionError::Csv {
-                file: file.clone(),
-                line: 0,
-                message: e.to_string(),
-            })?;
+            .map_err(|e| csv_err(0, e.to_string()))?;
+        const EXPECTED: &str = "expected two numbers `x_um,y_um` (µm), a blank line or `hole`";
         let mut vertices = 0u64;
         let mut loops: Vec<Vec<[f64; 2]>> = vec![Vec::new()];
-        for (i, raw) in text.lines().enumerate() {
-            let line = raw.trim();
-            if line.starts_with('#') {
+        for row in csv_rows::rows(&text) {
+            let row = row.map_err(|e| csv_err(e.line, e.message))?;
+            let line = row.line;
+            let hole = row.len() == 1 && row.get(0).eq_ignore_ascii_case("hole");
+            if (row.after_blank || hole) && !loops.last().is_some_and(|l| l.is_empty()) {
+                loops.push(Vec::new());
+            }
+            if hole {
                 continue;
             }
-            if line.is_empty() || line.eq_ignore_ascii_case("hole") {
-                if !loops.last().is_some_and(|l| l.is_empty()) {
-                    loops.push(Vec::new());
+            // A header: a first line, or a two-column row before any vertex, that is not
+            // numbers.
+            let header = line == 1 || loops.iter().all(|l| l.is_empty()) && row.len() == 2;
+            if row.len() != 2 {
+                if header {
+                    continue;
                 }
-                continue;
+                return Err(csv_err(
+                    line,
+                    format!("{EXPECTED}; got {} columns: {}", row.len(), row.text()),
+                ));
             }
-            let cols: Vec<&str> = line.split(',').map(str::trim).collect();
-            let parsed: Option<Vec<f64>> = cols.iter().map(|c| c.parse::<f64>().ok()).collect();
-            match parsed {
-                Some(v) if v.len() == 2 && v.iter().all(|x| x.abs() <= MAX_COORD_UM) => {
-                    vertices += 1;
-                    if vertices > max_vertices {
-                        return Err(SectionError::Csv {
-                            file,
-                            line: i + 1,
-                            message: format!(
-                                "more than {max_vertices} vertices, over the limit \
-                                 (`limits.polygon_vertices`)"
-                            ),
-                        });
-                    }
-                    loops.last_mut().unwrap().push([v[0], v[1]])
+            let (x, y) = match (row.number(0, "x_um"), row.number(1, "y_um")) {
+                (Ok(x), Ok(y)) => (x, y),
+                _ if header => continue,
+                (Err(m), _) | (_, Err(m)) => {
+                    return Err(csv_err(line, format!("{m}; {EXPECTED}")));
                 }
-                Some(v) if v.len() == 2 => {
-                    return Err(SectionError::Csv {
-                        file,
-                        line: i + 1,
-                        message: format!(
-                            "coordinates ({}, {}) µm: each must be a finite number within \
-                             ±{MAX_COORD_UM} µm (a fiber is at most a few hundred µm across)",
-                            v[0], v[1]
-                        ),
-                    })
-                }
-                _ if i == 0 || loops.iter().all(|l| l.is_empty()) && cols.len() == 2 => continue,
-                _ => {
-                    return Err(SectionError::Csv {
-                        file,
-                        line: i + 1,
-                        message: format!(
-                            "expected two numbers `x_um,y_um` (µm), a blank line or `hole`; got {line:?}"
-                        ),
-                    })
-                }
+            };
+            if let Some((col, v)) = [(1, x), (2, y)]
+                .into_iter()
+                .find(|(_, v)| !v.is_finite() || v.abs() > MAX_COORD_UM)
+            {
+                return Err(csv_err(
+                    line,
+                    format!(
+                        "coordinates ({x}, {y}) µm: column {col} ({v}) is out of range; each \
+                         must be a finite number within ±{MAX_COORD_UM} µm (a fiber is at most \
+                         a few hundred µm across)"
+                    ),
+                ));
             }
+            vertices += 1;
+            if vertices > max_vertices {
+                return Err(csv_err(
+                    line,
+                    format!(
+                        "more than {max_vertices} vertices, over the limit \
+                         (`limits.polygon_vertices`)"
+                    ),
+                ));
+            }
+            loops.last_mut().unwrap().push([x, y]);
         }
         loops.retain(|l| !l.is_empty());
         if loops.is_empty() {
@@ -299,6 +305,60 @@ impl Section {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn polygon_csv(text: &str) -> Result<Section, SectionError> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.csv");
+        std::fs::write(&path, text).unwrap();
+        Section::from_csv(&path, 100)
+    }
+
+    #[test]
+    fn polygon_csv_with_header_comments_and_holes() {
+        let square = |r: f64| format!("{},{}\n{r},{}\n{r},{r}\n{},{r}\n", -r, -r, -r, -r);
+        for sep in ["\n", "\n  \n# inner\n", "hole\n", "\r\n\r\n"] {
+            let text = format!(
+                "# outline\nx_um , y_um\n{}{sep}{}",
+                square(20.0),
+                square(5.0)
+            );
+            let s = polygon_csv(&text).unwrap();
+            assert_eq!(s.hole_count(), 1, "{sep:?}");
+        }
+        let s = polygon_csv(&format!("x,y\r\n{}", square(20.0).replace('\n', "\r\n"))).unwrap();
+        assert_eq!(s.hole_count(), 0);
+    }
+
+    #[test]
+    fn malformed_polygon_rows_name_file_line_and_column() {
+        let msg = |text: &str| polygon_csv(text).unwrap_err().to_string();
+        let m = msg("x_um,y_um\n# c\n0,0\n10,0\n10,abc\n");
+        assert!(
+            m.ends_with(
+                "p.csv:5: column 2 (y_um): expected a number, got \"abc\"; expected two \
+                 numbers `x_um,y_um` (µm), a blank line or `hole`"
+            ),
+            "{m}"
+        );
+        let m = msg("0,0\n10,0,5\n");
+        assert!(
+            m.contains("p.csv:2: ") && m.contains("got 3 columns: \"10,0,5\""),
+            "{m}"
+        );
+        let m = msg("0,0\n\n1e5,0\n");
+        assert!(
+            m.contains("p.csv:3: ") && m.contains("column 1 (100000) is out of range"),
+            "{m}"
+        );
+        let m = msg("0,0\n1,NaN\n");
+        assert!(
+            m.contains("p.csv:2: ") && m.contains("finite number within"),
+            "{m}"
+        );
+        let many: String = (0..101).map(|i| format!("{i},{}\n", i % 2)).collect();
+        let m = msg(&many);
+        assert!(m.contains("p.csv:101: more than 100 vertices"), "{m}");
+    }
 
     #[test]
     fn conic_hits_front_then_back() {
