@@ -582,33 +582,3 @@ fn mc_out_folder_holds_the_outputs_and_escapes_are_refused() {
     );
     assert!(o.status.success() && dir.path().join("x.mco").is_file());
 }
-
-/// Every flag of `baker mc` has a help line.
-#[test]
-fn mc_flags_all_have_help() {
-    let o = baker(&["mc", "--help"]);
-    let help = String::from_utf8_lossy(&o.stdout).to_string();
-    let options = help.split("Options:").nth(1).unwrap();
-    let mut flags = Vec::new();
-    for line in options.lines().filter(|l| l.trim_start().starts_with('-')) {
-        // `  -q, --quiet   text` / `      --out <PATH>   text`: the text after flag and value.
-        let mut words = line.split_whitespace().peekable();
-        if words.peek().is_some_and(|w| w.ends_with(',')) {
-            words.next();
-        }
-        flags.push(words.next().unwrap().to_string());
-        let rest: Vec<&str> = words.skip_while(|w| w.starts_with('<')).collect();
-        assert!(!rest.is_empty(), "{line:?} has no help:\n{help}");
-    }
-    for flag in [
-        "--mci-in",
-        "--out",
-        "--entry",
-        "--lambda-nm",
-        "--quiet",
-        "--json",
-    ] {
-        assert!(flags.iter().any(|f| f == flag), "{flag} missing:\n{help}");
-    }
-    assert!(!help.contains("--mco"), "--mco is a hidden alias");
-}

@@ -56,7 +56,8 @@ fn row(name: &str, c: &Command) -> Row {
     let out = find("out").map(|a| a.get_short() == Some('o'));
     for a in &args {
         if let Some(l) = a.get_long() {
-            if RETIRED.contains(&l) {
+            // A hidden flag is a compatibility name kept for old scripts, not in the help.
+            if RETIRED.contains(&l) && !a.is_hide_set() {
                 problems.push(format!("--{l} is an output flag; it is -o/--out now"));
             }
         }

@@ -185,8 +185,8 @@ fn is_type_error(m: &str) -> bool {
 /// Where the fields of a spec of the kind `text` is are documented.
 fn reference(text: &str) -> &'static str {
     match super::kind::detect("", text) {
-        Ok(super::SpecKind::Fiber) => "README.md, \"Fibers: `baker fiber trace`\",",
-        _ => "README.md, \"The skin spec language\",",
+        Ok(super::SpecKind::Fiber) => "specs/README.md, \"Fiber specs\",",
+        _ => "specs/README.md, \"Skin specs\",",
     }
 }
 
