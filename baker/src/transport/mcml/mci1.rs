@@ -1,6 +1,6 @@
 //! MCML 1.x input files (`.mci`, file version `1.0`; Wang, Jacques & Zheng 1995, MCML 1.2.2
 //! manual, mcmlio.c ReadParm): the version line, the number of runs, then per run the output
-//! file name (and A/B), photons, `dz dr` [cm], `nz nr na`, the number of layers, n above, one
+//! file name (and A/B), photons, `dz dr` (cm), `nz nr na`, the number of layers, n above, one
 //! `n mua mus g d` line per layer [cm, 1/cm], n below.
 
 use super::mci::{check_grid, count, nums, output_file_name, DataLines, Line, McmlRun, MAX_RUNS};

@@ -4,9 +4,9 @@
 //!
 //! 1. the media list: `name n mua mus g` lines up to `end` (1/cm);
 //! 2. per run: output file name and format (`A`/`B`; MCML 2.0 writes ASCII either way);
-//!    the geometry: the medium above (a name), one `medium thickness` line per layer [cm], the
+//!    the geometry: the medium above (a name), one `medium thickness` line per layer (cm), the
 //!    medium below, `end`; the source type (`pencil`/`isotropic`) and the starting z
-//!    [cm] with an optional medium name; `dz dr dt` [cm, cm, ps]; `nz nr nt na`; the scored
+//!    (cm) with an optional medium name; `dz dr dt` (cm, cm, ps); `nz nr nt na`; the scored
 //!    categories (`Rd_r A_z …`, `\` continues on the next line); `photons [hh:mm]`; the
 //!    threshold weight; the seed;
 //! 3. `end` after the last run.
