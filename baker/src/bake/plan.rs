@@ -252,16 +252,18 @@ impl Report {
         let mut s = String::new();
         let est = self.calibration_s.is_some();
         let units: &[UnitInfo] = if rows { &self.units } else { &[] };
-        let _ = writeln!(
-            s,
-            "{:<56} {:<9} {:>7} {:>14} {:<6}{}",
-            "unit",
-            "kind",
-            "shard#",
-            "photons",
-            "cached",
-            if est { "  estimate" } else { "" }
-        );
+        if rows {
+            let _ = writeln!(
+                s,
+                "{:<56} {:<9} {:>7} {:>14} {:<6}{}",
+                "unit",
+                "kind",
+                "shard#",
+                "photons",
+                "cached",
+                if est { "  estimate" } else { "" }
+            );
+        }
         for u in units {
             let e = u.estimate_s.map_or(String::new(), |e| {
                 format!("  {:>8}", if u.cached { "-".into() } else { duration(e) })
