@@ -15,15 +15,7 @@ use std::time::{Duration, Instant};
 
 use common::{baker_in as baker, events, tree};
 
-const SKIN: &str = "version: 1
-wavelengths: {start_nm: 450, stop_nm: 650, step_nm: 100}
-defaults: {model: five_layer, gender: female, location: forearm}
-profiles: {photons: 3000, seed: 11}
-entries:
-  - {name: light30, skin_type: I, age: 30, xi: 0}
-  - {name: dark30, skin_type: VI, age: 30, xi: 0}
-  - {name: mid80, skin_type: III, age: 80, xi: 1}
-";
+use common::SMALL_SKIN_SPEC as SKIN;
 
 const FIBER: &str = "version: 1
 bake: {resolution_deg: 15, photons_per_direction: 2048, seed: 5}

@@ -6,6 +6,17 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 
+/// A small skin spec: three entries in two simulation groups, two wavelengths, 3,000 photons.
+pub const SMALL_SKIN_SPEC: &str = "version: 1
+wavelengths: {start_nm: 450, stop_nm: 650, step_nm: 100}
+defaults: {model: five_layer, gender: female, location: forearm}
+profiles: {photons: 3000, seed: 11}
+entries:
+  - {name: light30, skin_type: I, age: 30, xi: 0}
+  - {name: dark30, skin_type: VI, age: 30, xi: 0}
+  - {name: mid80, skin_type: III, age: 80, xi: 1}
+";
+
 /// The repository root: specs and fixtures are named relative to it.
 pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

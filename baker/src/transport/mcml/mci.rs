@@ -6,7 +6,7 @@
 use std::path::{Component, Path, PathBuf};
 
 use crate::transport::engine::ROULETTE_WEIGHT;
-use crate::transport::stack::Stack;
+use crate::transport::stack::{Layer, RadialGrid, Stack};
 
 /// One run of an `.mci` file.
 #[derive(Debug, Clone, PartialEq)]
@@ -131,6 +131,28 @@ pub(super) fn count(v: f64, line: usize, what: &str) -> Result<usize, String> {
 
 /// nz, nr, na of line `line`, bounded by [`MAX_GRID_CELLS`] before the A(r, z) and Rd(r, α)
 /// grids are allocated from them.
+/// Run `index`'s stack from what either MCML version reads: the media above and below, the
+/// layers (mm) and the radial grid (`dr` in cm, as MCML writes it), checked as a stack file is.
+pub(super) fn run_stack(
+    index: usize,
+    (n_above, layers, n_below): (f64, Vec<Layer>, f64),
+    dr_cm: f64,
+    nr: usize,
+) -> Result<Stack, String> {
+    let stack = Stack {
+        n_above,
+        n_below,
+        layers,
+        junction: None,
+        grid: RadialGrid {
+            dr_mm: dr_cm * 10.0,
+            nr,
+        },
+    };
+    stack.validate().map_err(|e| format!("run {index}: {e}"))?;
+    Ok(stack)
+}
+
 pub(super) fn check_grid(line: usize, nz: usize, nr: usize, na: usize) -> Result<(), String> {
     if nz.saturating_mul(nr) > MAX_GRID_CELLS || nr.saturating_mul(na) > MAX_GRID_CELLS {
         return Err(format!(

@@ -5,7 +5,7 @@
 
 use super::mci::{check_grid, count, nums, output_file_name, DataLines, Line, McmlRun, MAX_RUNS};
 use crate::transport::engine::ROULETTE_WEIGHT;
-use crate::transport::stack::{Layer, RadialGrid, Stack, MAX_LAYERS};
+use crate::transport::stack::{Layer, MAX_LAYERS};
 
 /// Every run of a 1.x file whose version line `lines` has already given.
 pub(super) fn parse(lines: &mut DataLines<'_>) -> Result<Vec<McmlRun>, String> {
@@ -36,17 +36,7 @@ fn parse_run(lines: &mut DataLines<'_>, index: usize) -> Result<McmlRun, String>
     }
     let (nz, nr, na) = grid_counts(lines.next("nz, nr, na")?)?;
     let (n_above, layers, n_below) = parse_layers(lines)?;
-    let stack = Stack {
-        n_above,
-        n_below,
-        layers,
-        junction: None,
-        grid: RadialGrid {
-            dr_mm: d[1] * 10.0,
-            nr,
-        },
-    };
-    stack.validate().map_err(|e| format!("run {index}: {e}"))?;
+    let stack = super::mci::run_stack(index, (n_above, layers, n_below), d[1], nr)?;
     Ok(McmlRun {
         output_file,
         photons,

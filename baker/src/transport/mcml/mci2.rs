@@ -22,7 +22,7 @@
 //! generator with 1 whatever the file says, mcmlmain.c DoOneRun); `baker mc --seed` sets ours.
 
 use super::mci::{check_grid, count, output_file_name, DataLines, Line, McmlRun, MAX_RUNS};
-use crate::transport::stack::{Layer, RadialGrid, Stack, MAX_LAYERS};
+use crate::transport::stack::{Layer, MAX_LAYERS};
 
 /// Most media a media list may name (MCML 2.0 counts them in a `short`).
 pub const MAX_MEDIA: usize = 256;
@@ -168,17 +168,7 @@ fn parse_run(
         ));
     }
     parse_seed(lines.next("random number seed")?)?;
-    let stack = Stack {
-        n_above,
-        n_below,
-        layers,
-        junction: None,
-        grid: RadialGrid {
-            dr_mm: dr_cm * 10.0,
-            nr,
-        },
-    };
-    stack.validate().map_err(|e| format!("run {index}: {e}"))?;
+    let stack = super::mci::run_stack(index, (n_above, layers, n_below), dr_cm, nr)?;
     Ok(McmlRun {
         output_file,
         photons,
