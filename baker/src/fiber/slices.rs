@@ -101,6 +101,10 @@ pub struct SliceResult {
     /// Λ(ωi) per channel and its standard error.
     pub albedo: Vec<f64>,
     pub albedo_se: Vec<f64>,
+    /// Per bin: standard error (batch means) of variant 0's fraction averaged over its
+    /// channels, `[θo][Δφ]` (the density whose noise [`Noise`] summarises).
+    #[serde(default)]
+    pub density_se: Vec<f64>,
     pub noise: Noise,
     pub launched: u64,
     pub intercepted: u64,
@@ -323,10 +327,14 @@ impl SliceSums {
         let albedo_se = (0..nch)
             .map(|c| batch_se(self.alb_s[c], self.alb_s2[c], nbf))
             .collect();
+        let density_se = (0..bins)
+            .map(|b| batch_se(self.noise_s[b], self.noise_s2[b], nbf))
+            .collect();
         SliceResult {
             fraction,
             albedo,
             albedo_se,
+            density_se,
             noise: self.noise(grid, nbf),
             launched,
             intercepted: self.hits,

@@ -5,8 +5,9 @@
 //!   skin simulation group × wavelength (and its pilot run), or a run of consecutive stored
 //!   incoming directions of one fiber entry (all its cross-sections).
 //! - Its **key** is the SHA-256 of everything that determines the result ([`KeyBuilder`]):
-//!   the resolved physical inputs, photon counts, seeds, batch sizes, [`ENGINE_VERSION`] and
-//!   the checksums of the data tables compiled into the binary.
+//!   the resolved physical inputs, photon counts, seeds, batch sizes, [`ENGINE_VERSION`], the
+//!   digest of the source code that computes that kind of unit ([`code_digest`]) and the
+//!   checksums of the data tables compiled into the binary.
 //! - The [`cache`] keeps each unit's raw result (Σw, Σw², photon counts — not only
 //!   normalised values) under its key. A bake whose units are all cached runs no transport
 //!   and assembles byte-identical tables.
@@ -18,6 +19,11 @@ pub mod cache;
 pub mod events;
 pub mod interrupt;
 pub mod phase;
+pub mod source_digest;
+
+mod unit_code {
+    include!(concat!(env!("OUT_DIR"), "/unit_code.rs"));
+}
 
 use std::fmt;
 
@@ -27,11 +33,37 @@ pub use cache::{Cache, CacheMode};
 pub use events::{Bar, Events, Observer};
 pub use phase::{Phase, PhaseSpec};
 
-/// Bumped whenever a change to the transport or the bake's unit definitions would change a
-/// unit's result for the same inputs: old cache entries then stop matching.
+/// The version of the cache's key and result layout. Code changes need no bump: every key
+/// holds the digest of the code behind its kind of unit ([`code_digest`]).
 /// 2: the junction search (envelope bounds, bracketed Newton) moves crossings by < 1e-10 mm,
 /// and disk rejection takes one 64-bit draw per try (profile/DECISIONS.md row 13).
-pub const ENGINE_VERSION: u32 = 2;
+/// 3: keys hold the code digest; fiber units keep per-bin standard errors.
+pub const ENGINE_VERSION: u32 = 3;
+
+/// The digest of the source files that compute units of `kind` (and of `Cargo.lock`),
+/// computed by the build script from the code itself ([`source_digest`]). Kinds without a
+/// row (tests) get the digest of every kind's code together.
+pub fn code_digest(kind: &str) -> [u8; 32] {
+    match unit_code::UNIT_CODE.iter().find(|(k, ..)| *k == kind) {
+        Some((_, d, _)) => *d,
+        None => {
+            let mut h = Sha256::new();
+            for (_, d, _) in unit_code::UNIT_CODE {
+                h.update(d);
+            }
+            h.finalize().into()
+        }
+    }
+}
+
+/// The source files behind units of `kind` (`crate/…` for baker, `formats/…`), as the build
+/// script found them.
+pub fn code_files(kind: &str) -> &'static [&'static str] {
+    unit_code::UNIT_CODE
+        .iter()
+        .find(|(k, ..)| *k == kind)
+        .map_or(&[], |(_, _, f)| f)
+}
 
 /// A unit's content address.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -74,6 +106,7 @@ impl KeyBuilder {
         h.update(ENGINE_VERSION.to_le_bytes());
         h.update(env!("CARGO_PKG_VERSION").as_bytes());
         h.update([0]);
+        h.update(code_digest(kind));
         h.update(data);
         h.update(kind.as_bytes());
         h.update([0]);

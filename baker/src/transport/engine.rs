@@ -252,6 +252,10 @@ pub(crate) trait Scorer {
     /// The packet leaves the stack.
     fn escape(&mut self, exit: &Exit);
     fn lost(&mut self, weight: f64);
+    /// Weight Russian roulette added to the packet (9w for a survivor at CHANCE = 0.1, −w
+    /// for a packet it ended): direct runs score it so that the energy balance is exact.
+    #[inline(always)]
+    fn roulette(&mut self, _dw: f64) {}
     fn photon_done(&mut self);
 }
 
@@ -468,13 +472,18 @@ impl Packet {
         debug_assert!(self.w.is_finite());
         spin(&mut self.u, &p.hg[layer], rng);
         self.scattered = true;
-        self.roulette::<WHITE>(ln_roulette, rng)
+        self.roulette::<WHITE, S>(ln_roulette, rng, s)
     }
 
     /// Unbiased Russian roulette (MCML's WEIGHT and CHANCE) on the weight, or in white mode on
     /// the weight under the reference absorption. Returns whether the packet survives.
     #[inline(always)]
-    fn roulette<const WHITE: bool>(&mut self, ln_roulette: f64, rng: &mut BatchRng) -> bool {
+    fn roulette<const WHITE: bool, S: Scorer>(
+        &mut self,
+        ln_roulette: f64,
+        rng: &mut BatchRng,
+        s: &mut S,
+    ) -> bool {
         if WHITE {
             if self.log_w_ref < ln_roulette {
                 if uniform(rng.next_u64()) <= ROULETTE_CHANCE {
@@ -485,9 +494,12 @@ impl Packet {
                 }
             }
         } else if self.w < ROULETTE_WEIGHT {
-            if self.w > 0.0 && uniform(rng.next_u64()) <= ROULETTE_CHANCE {
+            let w0 = self.w;
+            if w0 > 0.0 && uniform(rng.next_u64()) <= ROULETTE_CHANCE {
                 self.w /= ROULETTE_CHANCE;
+                s.roulette(self.w - w0);
             } else {
+                s.roulette(-w0);
                 return false;
             }
         }
@@ -590,6 +602,8 @@ pub(crate) fn trace<const WHITE: bool, S: Scorer>(
 pub(crate) struct DirectScorer<'a> {
     pub t: &'a mut RadialTally,
     pub absorbed: [f64; MAX_LAYERS],
+    /// Weight roulette added to the current photon.
+    pub roulette: f64,
     pub dr_mm: f64,
 }
 
@@ -614,8 +628,16 @@ impl Scorer for DirectScorer<'_> {
     fn lost(&mut self, weight: f64) {
         self.t.lost.add(weight);
     }
+    #[inline(always)]
+    fn roulette(&mut self, dw: f64) {
+        self.roulette += dw;
+    }
     fn photon_done(&mut self) {
         self.t.photons += 1;
+        if self.roulette != 0.0 {
+            self.t.roulette.add(self.roulette);
+            self.roulette = 0.0;
+        }
         let mut total = 0.0;
         for (a, s) in self.absorbed.iter_mut().zip(self.t.absorbed.iter_mut()) {
             if *a != 0.0 {
@@ -691,6 +713,7 @@ pub fn run(stack: &Stack, o: &McOptions) -> anyhow::Result<McResult> {
                 let mut s = DirectScorer {
                     t: &mut t,
                     absorbed: [0.0; MAX_LAYERS],
+                    roulette: 0.0,
                     dr_mm: p.dr_mm,
                 };
                 for _ in 0..n {

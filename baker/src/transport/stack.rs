@@ -317,6 +317,72 @@ pub fn from_skin(e: &formats::OpticsEntry, i: usize) -> Stack {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::skin::{self, BodyLocation, Gender, MelaninInput, SkinParams, SkinType};
+    use crate::spectral::WavelengthGrid;
+
+    /// Issue 22, the junction: a skin entry's Eq. 1 reaches the photon loop unchanged. The
+    /// defaults are pinned against the thesis (§3.4.1 and Table 4's caption: 100 µm rete
+    /// ridges at 30, flat at 80; DECISIONS.md #18: peak amplitude A = 50 µm, half the 100 µm
+    /// peak-to-valley, period 100 µm), and the engine's height field (z̄ = bottom of the
+    /// living epidermis in the stack) equals Eq. 1 evaluated from the optics document's
+    /// junction at many points, written out here independently.
+    #[test]
+    fn skin_junction_reaches_the_engine_as_eq1() {
+        let grid = WavelengthGrid::uniform(500.0, 600.0, 50.0);
+        for (age, a_mm) in [(30.0, 0.050), (55.0, 0.025), (70.0, 0.010)] {
+            let p = SkinParams::new(
+                age,
+                Gender::Female,
+                BodyLocation::Forearm,
+                MelaninInput::SkinType(SkinType::II),
+                0.5,
+            );
+            let o = skin::evaluate(&p, &grid).unwrap();
+            let e = skin::document::entry("e", &p, &o);
+            let j = e.junction;
+            assert!(
+                (j.amplitude_mm - a_mm).abs() < 1e-12,
+                "A at {age}: {}",
+                j.amplitude_mm
+            );
+            for w in [j.omega_x_per_mm, j.omega_y_per_mm] {
+                assert!(
+                    (std::f64::consts::TAU / w - 0.1).abs() < 1e-12,
+                    "period {}",
+                    6.283 / w
+                );
+            }
+            let z_bar = e.layers[0].d_mm + e.layers[1].d_mm;
+            assert!((j.z_mean_mm - z_bar).abs() < 1e-15);
+            let stack = from_skin(&e, 1);
+            let prepared = super::super::engine::Prepared::new(&stack).unwrap();
+            let (upper, field) = prepared.junction.expect("a non-planar junction");
+            assert_eq!(upper, 1);
+            for k in 0..400 {
+                let (x, y) = (0.0137 * k as f64 - 2.0, 0.0291 * (k % 37) as f64 - 0.5);
+                let eq1 = j.z_mean_mm
+                    + j.amplitude_mm
+                        * (j.omega_x_per_mm * x + j.phi_x_rad).sin()
+                        * (j.omega_y_per_mm * y + j.phi_y_rad).sin();
+                assert!(
+                    (field.z(x, y) - eq1).abs() < 1e-13,
+                    "({x}, {y}): {} vs {eq1}",
+                    field.z(x, y)
+                );
+            }
+        }
+        // Flat at 80 (Table 4): no junction in the stack.
+        let p = SkinParams::new(
+            80.0,
+            Gender::Female,
+            BodyLocation::Forearm,
+            MelaninInput::SkinType(SkinType::II),
+            0.5,
+        );
+        let e = skin::document::entry("e", &p, &skin::evaluate(&p, &grid).unwrap());
+        assert_eq!(e.junction.amplitude_mm, 0.0);
+        assert!(from_skin(&e, 0).junction.is_none());
+    }
 
     /// Cache keys of skin bakes hash `format!("{stack:?}")`: the rendering must not change.
     #[test]

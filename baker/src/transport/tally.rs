@@ -19,6 +19,8 @@ pub struct RadialTally {
     pub rd_r: Vec<Sums>,
     /// Weight of photons stopped after too many boundary hits without interacting.
     pub lost: Sums,
+    /// Net weight Russian roulette added, per photon (zero in expectation).
+    pub roulette: Sums,
     pub scattering_events: u64,
 }
 
@@ -33,6 +35,7 @@ impl RadialTally {
             absorbed_total: Sums::default(),
             rd_r: vec![Sums::default(); nr],
             lost: Sums::default(),
+            roulette: Sums::default(),
             scattering_events: 0,
         }
     }
@@ -50,6 +53,7 @@ impl RadialTally {
             a.merge(b);
         }
         self.lost.merge(&o.lost);
+        self.roulette.merge(&o.roulette);
         self.scattering_events += o.scattering_events;
     }
 }
@@ -82,6 +86,10 @@ pub struct McResult {
     pub rd_r_integrated: f64,
     /// Weight of photons stopped for bouncing without interacting (reported, ideally 0).
     pub lost: f64,
+    /// Net weight Russian roulette added per incident photon (zero in expectation), with its
+    /// standard error: Rsp + Rd + Tt + ΣA + lost = 1 + `roulette` exactly, photon by photon.
+    pub roulette: f64,
+    pub roulette_se: f64,
     pub photons: u64,
     pub threads: usize,
     pub seconds: f64,
@@ -126,6 +134,8 @@ impl McResult {
                 .collect(),
             rd_r_integrated,
             lost: t.lost.mean(n),
+            roulette: t.roulette.mean(n),
+            roulette_se: t.roulette.se(n),
             photons: n,
             threads,
             seconds,

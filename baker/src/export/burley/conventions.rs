@@ -117,4 +117,37 @@ mod tests {
         assert!((diffuse_transmission_mfp_mm(0.8, 1.0) - 1.1).abs() < 1e-12);
         assert_eq!(unity_scattering_distance_mm(0.7), 0.7);
     }
+
+    /// Issue 22: s(A) at several albedos against Christensen & Burley 2015's formulas
+    /// evaluated by hand (perpendicular: 1.85 − A + 7|A − 0.8|³; diffuse surface transmission,
+    /// their Eq. 6: 1.9 − A + 3.5(A − 0.8)²; diffuse mean free path: 3.5 + 100(A − 0.33)⁴),
+    /// away from A = 0.8 and 0.33 where their A-dependent terms vanish.
+    #[test]
+    fn scaling_factors_at_several_albedos() {
+        // (A, s_perpendicular, s_diffuse_transmission, s_dmfp)
+        let table = [
+            (0.0, 5.434, 4.14, 4.685_921),
+            (0.2, 3.162, 2.96, 3.528_561),
+            (0.5, 1.539, 1.715, 3.583_521),
+            (0.9, 0.957, 1.035, 14.056_001),
+            (1.0, 0.906, 1.04, 23.651_121),
+        ];
+        for (a, sp, sd, sm) in table {
+            assert!(
+                (s_perpendicular(a) - sp).abs() < 1e-12,
+                "s_perp({a}) = {}",
+                s_perpendicular(a)
+            );
+            assert!(
+                (s_diffuse_transmission(a) - sd).abs() < 1e-12,
+                "s_diffuse({a}) = {}",
+                s_diffuse_transmission(a)
+            );
+            assert!(
+                (s_dmfp(a) - sm).abs() < 1e-12,
+                "s_dmfp({a}) = {}",
+                s_dmfp(a)
+            );
+        }
+    }
 }

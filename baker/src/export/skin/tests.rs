@@ -238,3 +238,79 @@ fn identifiers_are_valid_and_unique() {
     assert_eq!(num(1234.56789), "1234.568");
     assert_eq!(xml_comment("a--b"), "a- -b");
 }
+
+/// Issue 22: one Unreal and one Unity profile pinned against the engines' own conversion code,
+/// transcribed in `validation/engine_reference/engine_sss.py` from Unreal Engine 5.4's
+/// `SubsurfaceProfile.cpp` / `BurleyNormalizedSSSCommon.ush` and HDRP's
+/// `DiffusionProfileSettings.cs` (repositories, commits and quoted lines in that folder's
+/// README.md). The numbers are `pinned.json`'s case 1 and 2: the fields that make each
+/// engine render Burley (A, d) exactly, and, for HDRP, the filter radius it computes.
+#[test]
+fn unreal_and_unity_fields_match_the_engines_own_conversions() {
+    struct Case {
+        a: [f64; 3],
+        d_mm: [f64; 3],
+        unreal_color: [f64; 3],
+        unreal_distance_cm: f64,
+        hdrp_product_mm: [f64; 3],
+        hdrp_filter_radius_mm: f64,
+    }
+    let cases = [
+        Case {
+            a: [0.85, 0.55, 0.35],
+            d_mm: [1.2, 0.6, 0.3],
+            unreal_color: [0.72063, 0.507375, 0.3848175],
+            unreal_distance_cm: 0.1,
+            hdrp_product_mm: [1.2, 0.6, 0.3],
+            hdrp_filter_radius_mm: 19.87727850404809,
+        },
+        Case {
+            a: [0.6, 0.3, 0.15],
+            d_mm: [0.8, 0.35, 0.2],
+            unreal_color: [0.62688, 0.50925, 0.434685],
+            unreal_distance_cm: 0.1,
+            hdrp_product_mm: [0.8, 0.35, 0.2],
+            hdrp_filter_radius_mm: 13.251519002698727,
+        },
+    ];
+    for (k, c) in cases.iter().enumerate() {
+        let f = fit_of(c.a, c.d_mm);
+        let u: Value =
+            serde_json::from_str(&write_unreal(&[f.clone()], &Provenance::default())).unwrap();
+        let p = &u["profiles"][0]["SubsurfaceProfile"];
+        let dist = p["MeanFreePathDistance"].as_f64().unwrap();
+        assert!(
+            (dist - c.unreal_distance_cm).abs() < 1e-12,
+            "case {k}: {dist}"
+        );
+        for (ch, key) in ["R", "G", "B"].iter().enumerate() {
+            let got = p["MeanFreePathColor"][key].as_f64().unwrap();
+            assert!(
+                (got - c.unreal_color[ch]).abs() < 1e-9,
+                "case {k} MeanFreePathColor.{key}: {got} vs Unreal's {}",
+                c.unreal_color[ch]
+            );
+            assert_eq!(p["SurfaceAlbedo"][key].as_f64(), Some(c.a[ch]));
+        }
+        let h: Value = serde_json::from_str(&write_unity(&[f], &Provenance::default())).unwrap();
+        let d = &h["profiles"][0]["DiffusionProfile"];
+        let mult = d["scatteringDistanceMultiplier"].as_f64().unwrap();
+        for (ch, key) in ["r", "g", "b"].iter().enumerate() {
+            let product = d["scatteringDistance"][key].as_f64().unwrap() * mult;
+            assert!(
+                (product - c.hdrp_product_mm[ch]).abs() < 1e-12,
+                "case {k} scatteringDistance.{key} × multiplier: {product}"
+            );
+        }
+        if c.hdrp_filter_radius_mm.is_finite() {
+            let r = h["profiles"][0]["derived"]["filter_radius_mm"]
+                .as_f64()
+                .unwrap();
+            assert!(
+                (r / c.hdrp_filter_radius_mm - 1.0).abs() < 1e-9,
+                "case {k} filter radius {r} vs HDRP's {}",
+                c.hdrp_filter_radius_mm
+            );
+        }
+    }
+}

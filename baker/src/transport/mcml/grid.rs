@@ -59,6 +59,9 @@ impl Scorer for GridScorer<'_> {
     fn lost(&mut self, weight: f64) {
         self.direct.lost(weight);
     }
+    fn roulette(&mut self, dw: f64) {
+        self.direct.roulette(dw);
+    }
     fn photon_done(&mut self) {
         self.direct.photon_done();
     }
@@ -96,6 +99,7 @@ pub fn simulate_grid(run: &McmlRun, o: &McOptions) -> anyhow::Result<(McResult, 
                     direct: DirectScorer {
                         t: &mut t,
                         absorbed: [0.0; MAX_LAYERS],
+                        roulette: 0.0,
                         dr_mm: p.dr_mm,
                     },
                     grid: empty(),
