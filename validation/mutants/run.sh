@@ -19,8 +19,8 @@ cd "$(dirname "$0")/../.."
 module=${1:?usage: run.sh MODULE [cargo-mutants options…]}
 shift
 case "$module" in
-skin)      files=('baker/src/skin/**');      tests=(--lib --test table4 --test spectra --test properties) ;;
-spectral)  files=('baker/src/spectral/**');  tests=(--lib --test spectra --test table4 --test properties) ;;
+skin)      files=('baker/src/skin/**');      tests=(--lib --test table4 --test spectra --test properties --test skin_reference) ;;
+spectral)  files=('baker/src/spectral/**');  tests=(--lib --test spectra --test table4 --test properties --test skin_reference) ;;
 transport) files=('baker/src/transport/**'); tests=(--lib --test transport) ;;
 fiber)     files=('baker/src/fiber/**');     tests=(--lib --test fiber --test fiber_references) ;;
 fit)       files=('baker/src/fit/**');       tests=(--lib --test profiles) ;;
