@@ -287,3 +287,115 @@ fn invalid_stacks_are_rejected_with_the_field() {
     t.junction.as_mut().unwrap().amplitude_mm = 0.5;
     assert!(t.validate().unwrap_err().to_string().contains("junction"));
 }
+
+/// The MCML fixture (`tests/stacks/mcml_rd_r/`): bins `(r_lo, r_hi, rd, rd_se)` and totals.
+struct McmlRd {
+    stack: Stack,
+    bins: Vec<[f64; 4]>,
+    rd: (f64, f64),
+}
+
+fn mcml_rd() -> McmlRd {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/stacks/mcml_rd_r");
+    let rows = |name: &str| -> Vec<Vec<String>> {
+        std::fs::read_to_string(dir.join(name))
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.is_empty())
+            .skip(1)
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    };
+    let f = |s: &String| s.parse::<f64>().unwrap();
+    let stack: transport::stack::StackFile =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("stack.json")).unwrap()).unwrap();
+    let totals = rows("totals.csv");
+    let rd = totals.iter().find(|r| r[0] == "Rd").unwrap();
+    McmlRd {
+        stack: stack.into_stack().unwrap(),
+        bins: rows("rd_r.csv")
+            .iter()
+            .map(|r| [f(&r[0]), f(&r[1]), f(&r[2]), f(&r[3])])
+            .collect(),
+        rd: (f(&rd[1]), f(&rd[2])),
+    }
+}
+
+/// Two-sided Šidák z threshold for `n` comparisons at family-wise error 10⁻³.
+fn sidak_1e3(n: usize) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    let a1 = 1.0 - (1.0 - 1e-3f64).powf(1.0 / n as f64);
+    Normal::new(0.0, 1.0).unwrap().inverse_cdf(1.0 - 0.5 * a1)
+}
+
+/// Issue 22: Rd(r) of the direct engine against MCML 2.0's own `.mco` radial output (16 M
+/// photons over 8 seeds, SplitMix64 in MCML's generator; `validation/make_mcml_rd_fixture.py`)
+/// on the planar five-layer skin stack with g = 0.9: every bin, merged from the 10 µm annuli
+/// exactly as the fixture merges MCML's, and the total Rd, as z-scores with both standard
+/// errors. A wrong exit radius or annulus area moves the profile far beyond them.
+#[test]
+fn rd_r_matches_mcml_on_the_five_layer_stack() {
+    let m = mcml_rd();
+    let r = run(&m.stack, 500_000, 17);
+    let dr = m.stack.grid.dr_mm;
+    let mut zs = Vec::new();
+    for b in &m.bins {
+        let (i0, i1) = ((b[0] / dr).round() as usize, (b[1] / dr).round() as usize);
+        let area = |i: usize| (2 * i + 1) as f64;
+        let norm = (i1 * i1 - i0 * i0) as f64;
+        let ours: f64 = (i0..i1).map(|i| r.rd_r_per_mm2[i] * area(i)).sum::<f64>() / norm;
+        // Annuli of one photon's single exit are negatively correlated: adding variances
+        // over-states the merged bin's error, so the test errs on the safe side.
+        let se = (i0..i1)
+            .map(|i| (r.rd_r_per_mm2_se[i] * area(i)).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / norm;
+        zs.push(((ours - b[2]) / se.hypot(b[3]), b[0]));
+    }
+    zs.push(((r.rd - m.rd.0) / r.rd_se.hypot(m.rd.1), -1.0));
+    let limit = sidak_1e3(zs.len());
+    for (z, r_lo) in &zs {
+        assert!(
+            z.abs() < limit,
+            "Rd(r) bin from {r_lo} mm (−1: total Rd): z = {z:.2}, limit {limit:.2}"
+        );
+    }
+}
+
+/// The bake's path to Rd(r) (white run with absorption applied per set, the bake's radial
+/// bins, `profile::simulate::store_run`'s division by the annulus areas) on the same stack,
+/// against the same MCML fixture.
+#[test]
+fn bake_rd_r_matches_mcml_on_the_five_layer_stack() {
+    use baker::profile::simulate::{empty_profile, store_run};
+    use baker::transport::{run_white_sets, RadialBins};
+    let m = mcml_rd();
+    let mut edges: Vec<f64> = m.bins.iter().map(|b| b[0]).collect();
+    edges.push(m.bins.last().unwrap()[1]);
+    let bins = RadialBins::from_edges(edges).unwrap();
+    let mua: Vec<f64> = m.stack.layers.iter().map(|l| l.mua_per_mm).collect();
+    let mut white = m.stack.clone();
+    for l in &mut white.layers {
+        l.mua_per_mm = 0.0;
+    }
+    let w = run_white_sets(&white, &[mua], &bins, &McOptions::new(300_000, 23)).unwrap();
+    let mut p = empty_profile(&[550.0], &bins);
+    store_run(&mut p, 0, 0, &w, &w.sets[0], &bins.areas_mm2());
+    let mut zs = Vec::new();
+    for (k, b) in m.bins.iter().enumerate() {
+        let se = p.rd_per_mm2_se[0][k].hypot(b[3]);
+        zs.push(((p.rd_per_mm2[0][k] - b[2]) / se, b[0]));
+    }
+    zs.push((
+        (p.rd_total[0] - m.rd.0) / p.rd_total_se[0].hypot(m.rd.1),
+        -1.0,
+    ));
+    let limit = sidak_1e3(zs.len());
+    for (z, r_lo) in &zs {
+        assert!(
+            z.abs() < limit,
+            "bake Rd(r) bin from {r_lo} mm (−1: total Rd): z = {z:.2}, limit {limit:.2}"
+        );
+    }
+}
