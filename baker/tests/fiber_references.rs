@@ -279,11 +279,22 @@ fn splitting_agrees_with_plain_tracing() {
 /// bin centre, so the reader's flips (θo for the z-mirror, Δφ for a mirror line) and the
 /// detected rotation and mirror angles are all exercised: trilobal polyester (z-mirror,
 /// 3-fold, mirror), silk (z-mirror) and wool (2-fold and mirror, no z-mirror under its
-/// cuticle). Plain tracing: each bin's fraction has the multinomial standard error
-/// √(p(1 − p)/N), which the stratified entry offsets only lower.
+/// cuticle), and an ellipse turned by 30° (z-mirror, 2-fold, mirror at 30°). Plain tracing:
+/// each bin's fraction has the multinomial standard error √(p(1 − p)/N), which the
+/// stratified entry offsets only lower.
 #[test]
 fn symmetry_reduced_tables_match_full_traces() {
     let tmp = tempfile::tempdir().unwrap();
+    // An ellipse turned by 30°: its only mirror lines are at 30° and 120°, so a mirror angle
+    // read wrongly (0° for the others) maps directions to the wrong bins.
+    let mut csv = String::new();
+    for k in 0..240 {
+        let t = std::f64::consts::TAU * k as f64 / 240.0;
+        let (x, y) = (6.0 * t.cos(), 3.6 * t.sin());
+        let (s, c) = 30f64.to_radians().sin_cos();
+        csv += &format!("{},{}\n", c * x - s * y, s * x + c * y);
+    }
+    std::fs::write(tmp.path().join("tilted.csv"), csv).unwrap();
     let photons = 16_384u64;
     let mut yaml = format!(
         "version: 1\nbake: {{resolution_deg: 15, photons_per_direction: {photons}, seed: 5, precision: f32}}\nfibers:\n"
@@ -293,6 +304,7 @@ fn symmetry_reduced_tables_match_full_traces() {
             "  - {{name: trilobal_{sym}, type: polyester, section: {{shape: trilobal}}, symmetry: {sym}}}
   - {{name: silk_{sym}, type: silk, section: {{shape: silk}}, seed: 2, symmetry: {sym}}}
   - {{name: wool_{sym}, type: wool, diameter_um: 20, symmetry: {sym}}}
+  - {{name: tilted_{sym}, type: polyester, section: {{polygon: tilted.csv}}, symmetry: {sym}}}
 "
         );
     }
@@ -302,6 +314,7 @@ fn symmetry_reduced_tables_match_full_traces() {
         ("trilobal", 24 * 12 / 12),
         ("silk", 24 * 12 / 2),
         ("wool", 24 * 12 / 4),
+        ("tilted", 24 * 12 / 8),
     ] {
         let a = Bcsdf::open(out.join(format!("{name}_auto/section-00.bcsdf"))).unwrap();
         let b = Bcsdf::open(out.join(format!("{name}_none/section-00.bcsdf"))).unwrap();

@@ -53,11 +53,12 @@ PLANTED = [
      "std::f64::consts::PI * dr_mm * dr_mm * (2 * i + 1) as f64", "std::f64::consts::PI * dr_mm * dr_mm * (2 * i + 2) as f64",
      ["--test", "transport"]),
     ("Rd(r) of the bake: annulus areas of the radial bins", "baker/src/transport/radial.rs",
-     "PI * (e[1] * e[1] - e[0] * e[0])", "PI * (e[1] * e[1] - e[0] * e[0]) * 1.05", ["--test", "transport"]),
+     ".map(|w| std::f64::consts::PI * (w[1] * w[1] - w[0] * w[0]))",
+     ".map(|w| std::f64::consts::PI * (w[1] * w[1] - w[0] * w[0]) * 1.05)", ["--test", "transport"]),
     ("Burley s(A): perpendicular cubic term 7|A-0.8|^3 -> 7|A-0.8|^2", "baker/src/export/burley/conventions.rs",
      "1.85 - a + 7.0 * (a - 0.8).abs().powi(3)", "1.85 - a + 7.0 * (a - 0.8).abs().powi(2)", ["--lib"]),
     ("cache key ignores the code digest", "baker/src/pipeline/mod.rs",
-     "        h.update(code_digest(kind));\n", "", ["--lib"]),
+     "        h.update(code);\n", "", ["--lib"]),
 ]
 
 

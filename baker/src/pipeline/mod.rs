@@ -101,12 +101,17 @@ impl KeyBuilder {
     /// A key of `kind` (e.g. `skin-run`), with the engine version and `data`, the checksum of
     /// the data tables the result depends on ([`crate::data::checksum`] in a bake).
     pub fn new(kind: &str, data: &[u8; 32]) -> KeyBuilder {
+        Self::with_code(kind, &code_digest(kind), data)
+    }
+
+    /// [`KeyBuilder::new`] with the code digest given: what a key would be under other code.
+    pub fn with_code(kind: &str, code: &[u8; 32], data: &[u8; 32]) -> KeyBuilder {
         let mut h = Sha256::new();
         h.update(b"baker-unit\0");
         h.update(ENGINE_VERSION.to_le_bytes());
         h.update(env!("CARGO_PKG_VERSION").as_bytes());
         h.update([0]);
-        h.update(code_digest(kind));
+        h.update(code);
         h.update(data);
         h.update(kind.as_bytes());
         h.update([0]);
@@ -362,5 +367,32 @@ impl From<UnitError> for anyhow::Error {
             ),
             UnitError::Failed(e) => e,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 22: a unit's key follows the code that computes it. Keys under other code
+    /// differ; the key a bake uses is the one under the digest compiled in for its kind.
+    #[test]
+    fn keys_change_with_the_code() {
+        let data = [7u8; 32];
+        let key = |code: &[u8; 32]| {
+            KeyBuilder::with_code("skin-run", code, &data)
+                .part("x", &1.5)
+                .finish()
+        };
+        let here = code_digest("skin-run");
+        let mut other = here;
+        other[0] ^= 1;
+        assert_ne!(key(&here), key(&other));
+        assert_eq!(
+            KeyBuilder::new("skin-run", &data).part("x", &1.5).finish(),
+            key(&here)
+        );
+        assert_ne!(code_digest("skin-run"), code_digest("fiber-slices"));
+        assert!(!code_files("fiber-slices").is_empty());
     }
 }
