@@ -426,4 +426,74 @@ mod tests {
         assert!(a.weight_rgb.iter().flatten().all(|&x| x >= 0.0));
         assert!(a.variance_mm2.windows(2).all(|p| p[0] <= p[1]));
     }
+
+    /// Issue 22: `fit_error` is the documented energy-weighted relative L1 (FORMAT.md), written
+    /// out here on a hand-made table: bins from the first up to the one holding r99 (bin 0
+    /// always), |fit energy − table energy| over the table energy.
+    #[test]
+    fn fit_error_is_the_energy_weighted_l1_inside_r99() {
+        let edges = [0.0, 0.1, 0.3, 0.6, 1.0, 2.0];
+        let v = [0.05, 0.4];
+        let w = [[0.3, 0.2, 0.1], [0.5, 0.1, 0.0]];
+        // A table that is the fit times (1 + ε_k), different per bin and channel.
+        let exact = table_of(&edges, &v, &w);
+        let eps = [0.1, -0.05, 0.2, 0.3, -0.4];
+        let table: Vec<[f64; 3]> = exact
+            .iter()
+            .zip(eps)
+            .map(|(t, e)| [t[0] * (1.0 + e), t[1] * (1.0 - e), t[2] * (1.0 + 2.0 * e)])
+            .collect();
+        let r99 = [0.7, 0.05, 5.0];
+        let got = fit_error(&edges, &table, r99, &v, &w);
+        for c in 0..3 {
+            let (mut num, mut den) = (0.0, 0.0);
+            for k in 0..5 {
+                if k > 0 && edges[k] >= r99[c] {
+                    break;
+                }
+                let area = std::f64::consts::PI * (edges[k + 1].powi(2) - edges[k].powi(2));
+                num += (exact[k][c] - table[k][c]).abs() * area;
+                den += table[k][c] * area;
+            }
+            assert!(
+                (got[c] - num / den).abs() < 1e-12,
+                "channel {c}: {} vs {}",
+                got[c],
+                num / den
+            );
+        }
+        // Channel 1's r99 lies inside bin 0: only that bin counts (|ε0| / (1 − ε0)).
+        assert!((got[1] - 0.1 / 0.9).abs() < 1e-12, "{}", got[1]);
+    }
+
+    /// The L1 weights of one channel are optimal: on a table that is an exact sum of the
+    /// basis with a few outlying bins, IRLS recovers the exact weights (L1 ignores outliers,
+    /// least squares would not).
+    #[test]
+    fn l1_weights_ignore_outliers() {
+        let bins = RadialBins::fine_then_log(0.02, 1.1, 8.0);
+        let v = [0.02, 0.3, 2.5];
+        let w = [[0.4, 0.4, 0.4], [0.3, 0.3, 0.3], [0.2, 0.2, 0.2]];
+        let mut table = table_of(bins.edges_mm(), &v, &w);
+        for k in [3usize, 11, 19] {
+            for c in 0..3 {
+                table[k][c] *= 1.5;
+            }
+        }
+        let o = GaussianFitOptions {
+            count: 3,
+            ..GaussianFitOptions::default()
+        };
+        let fit = fit_sum_of_gaussians(bins.edges_mm(), &table, [8.0; 3], &o).unwrap();
+        for (fv, tv) in fit.variance_mm2.iter().zip(v) {
+            assert!(
+                (fv / tv - 1.0).abs() < 1e-3,
+                "variances {:?}",
+                fit.variance_mm2
+            );
+        }
+        for (fw, tw) in fit.weight_rgb.iter().zip(w) {
+            assert!((fw[0] - tw[0]).abs() < 1e-3, "weights {:?}", fit.weight_rgb);
+        }
+    }
 }

@@ -148,4 +148,85 @@ mod tests {
         assert_eq!(w[0], 0.0);
         assert!((w[1] - 0.4).abs() < 1e-12, "{w:?}");
     }
+
+    /// The NNLS answer by brute force: every subset of active (positive) unknowns, solved
+    /// unconstrained by Cramer-free Gaussian elimination written here, kept if feasible, the
+    /// best objective ½wᵀGw − hᵀw wins (a convex problem: the feasible stationary point of the
+    /// right subset is the optimum).
+    fn brute_force(g: &[Vec<f64>], h: &[f64]) -> (Vec<f64>, f64) {
+        let n = h.len();
+        let obj = |w: &[f64]| {
+            let quad: f64 = (0..n)
+                .map(|i| (0..n).map(|j| w[i] * g[i][j] * w[j]).sum::<f64>())
+                .sum();
+            0.5 * quad - (0..n).map(|i| h[i] * w[i]).sum::<f64>()
+        };
+        let mut best = (vec![0.0; n], 0.0);
+        for mask in 1u32..(1 << n) {
+            let p: Vec<usize> = (0..n).filter(|&i| mask & (1 << i) != 0).collect();
+            // Gauss–Jordan on the subset.
+            let m = p.len();
+            let mut a: Vec<Vec<f64>> = p
+                .iter()
+                .map(|&i| p.iter().map(|&j| g[i][j]).chain([h[i]]).collect())
+                .collect();
+            let mut ok = true;
+            for c in 0..m {
+                let piv = (c..m)
+                    .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
+                    .unwrap();
+                if a[piv][c].abs() < 1e-12 {
+                    ok = false;
+                    break;
+                }
+                a.swap(c, piv);
+                for r in 0..m {
+                    if r != c {
+                        let f = a[r][c] / a[c][c];
+                        for k in 0..=m {
+                            a[r][k] -= f * a[c][k];
+                        }
+                    }
+                }
+            }
+            if !ok {
+                continue;
+            }
+            let mut w = vec![0.0; n];
+            for (k, &i) in p.iter().enumerate() {
+                w[i] = a[k][m] / a[k][k];
+            }
+            if w.iter().all(|&x| x >= -1e-12) && obj(&w) < best.1 {
+                best = (w.clone(), obj(&w));
+            }
+        }
+        best
+    }
+
+    /// Issue 22: 200 random problems of 2–6 unknowns, many with negative unconstrained
+    /// solutions, against brute force over all active sets.
+    #[test]
+    fn matches_brute_force_on_random_problems() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for case in 0..200 {
+            let n = 2 + case % 5;
+            let rows = n + 3;
+            let b: Vec<Vec<f64>> = (0..rows)
+                .map(|_| (0..n).map(|_| next()).collect())
+                .collect();
+            let e: Vec<f64> = (0..rows).map(|_| next()).collect();
+            let (g, h) = normal(&b, &e);
+            let w = nnls_normal(&g, &h);
+            let (want, _) = brute_force(&g, &h);
+            for (a, b) in w.iter().zip(&want) {
+                assert!((a - b).abs() < 1e-8, "case {case}: {w:?} vs {want:?}");
+            }
+        }
+    }
 }

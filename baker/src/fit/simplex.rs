@@ -68,3 +68,45 @@ pub fn nelder_mead(
     let (x, fx) = simplex.swap_remove(0);
     (x, fx, evals)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A quadratic bowl: the minimum is found, and the stopping rule (the simplex's values
+    /// agree to `rel_tol`) ends the search long before the evaluation budget.
+    #[test]
+    fn finds_a_quadratic_minimum_and_stops_on_its_tolerance() {
+        let mut f =
+            |x: &[f64]| 1.0 + (x[0] - 1.0).powi(2) + 4.0 * (x[1] + 2.0).powi(2) + 0.5 * x[2] * x[2];
+        let (x, fx, evals) = nelder_mead(&mut f, &[5.0, 5.0, 5.0], 1.0, 20_000, 1e-12);
+        assert!(
+            (x[0] - 1.0).abs() < 1e-4 && (x[1] + 2.0).abs() < 1e-4 && x[2].abs() < 1e-4,
+            "{x:?}"
+        );
+        assert!((fx - 1.0).abs() < 1e-10);
+        assert!(evals < 2_000, "{evals} evaluations");
+    }
+
+    /// Expansion: on a slope the simplex must grow geometrically (Lagarias et al.: reflect
+    /// by 1, expand by 2), not crawl one step per reflection.
+    #[test]
+    fn expands_along_a_slope() {
+        let mut f = |x: &[f64]| x[0];
+        let (x, _, evals) = nelder_mead(&mut f, &[0.0], 1.0, 60, 0.0);
+        assert!(evals >= 60);
+        assert!(x[0] < -1e6, "{x:?}");
+    }
+
+    /// Contraction and shrink: from a simplex far too large around a narrow minimum of |x|,
+    /// the search still closes in on 0.
+    #[test]
+    fn contracts_onto_a_narrow_minimum() {
+        let mut f = |x: &[f64]| x[0].abs() + 10.0 * (x[1] - 0.3).abs();
+        let (x, fx, _) = nelder_mead(&mut f, &[7.0, -5.0], 50.0, 5_000, 1e-14);
+        assert!(
+            x[0].abs() < 1e-6 && (x[1] - 0.3).abs() < 1e-6 && fx < 1e-5,
+            "{x:?} {fx}"
+        );
+    }
+}
