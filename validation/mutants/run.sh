@@ -21,7 +21,7 @@ shift
 case "$module" in
 skin)      files=('baker/src/skin/**');      tests=(--lib --test table4 --test spectra --test properties --test skin_reference) ;;
 spectral)  files=('baker/src/spectral/**');  tests=(--lib --test spectra --test table4 --test properties --test skin_reference) ;;
-transport) files=('baker/src/transport/**'); tests=(--lib --test transport) ;;
+transport) files=('baker/src/transport/**'); tests=(--lib --test transport --test cli) ;;
 fiber)     files=('baker/src/fiber/**');     tests=(--lib --test fiber --test fiber_references) ;;
 fit)       files=('baker/src/fit/**');       tests=(--lib --test profiles) ;;
 profile)   files=('baker/src/profile/**');   tests=(--lib --test profiles) ;;
