@@ -100,14 +100,14 @@ fibers:
         let theta_rad = theta_c.abs().to_radians();
         // Largest spread weight cos θ / cos θc over the bin: bounds the per-photon variance.
         let g_max = (theta_rad - 0.5 * res.to_radians()).cos() / theta_rad.cos();
-        for c in 0..2 {
+        for (c, &mua_c) in mua.iter().enumerate() {
             let albedo = d.albedo[i * 2 + c] as f64;
             let se = d.albedo_se[i * 2 + c] as f64;
             let reference = bin_averaged_dphi_fractions(
                 theta_rad,
                 res.to_radians(),
                 1.55,
-                mua[c],
+                mua_c,
                 10.0,
                 np,
                 40_000,

@@ -231,8 +231,8 @@ fn paths_in(text: &str, crate_names: &[String]) -> Vec<Vec<String>> {
             i += 1;
         }
         let word: String = chars[start..i].iter().collect();
-        if !roots.contains(&word) || !(chars.get(i) == Some(&':') && chars.get(i + 1) == Some(&':'))
-        {
+        let qualified = chars.get(i) == Some(&':') && chars.get(i + 1) == Some(&':');
+        if !qualified || !roots.contains(&word) {
             continue;
         }
         let mut path = vec![word];

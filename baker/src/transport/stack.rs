@@ -349,7 +349,7 @@ mod tests {
                 assert!(
                     (std::f64::consts::TAU / w - 0.1).abs() < 1e-12,
                     "period {}",
-                    6.283 / w
+                    std::f64::consts::TAU / w
                 );
             }
             let z_bar = e.layers[0].d_mm + e.layers[1].d_mm;

@@ -275,8 +275,11 @@ fn unreal_and_unity_fields_match_the_engines_own_conversions() {
     ];
     for (k, c) in cases.iter().enumerate() {
         let f = fit_of(c.a, c.d_mm);
-        let u: Value =
-            serde_json::from_str(&write_unreal(&[f.clone()], &Provenance::default())).unwrap();
+        let u: Value = serde_json::from_str(&write_unreal(
+            std::slice::from_ref(&f),
+            &Provenance::default(),
+        ))
+        .unwrap();
         let p = &u["profiles"][0]["SubsurfaceProfile"];
         let dist = p["MeanFreePathDistance"].as_f64().unwrap();
         assert!(
