@@ -12,15 +12,8 @@ use std::collections::BTreeMap;
 
 use serde_json::Value;
 
-/// Data rows of a fixture CSV (after its `#` header lines and its column-name row).
 fn rows(name: &str) -> Vec<Vec<String>> {
-    std::fs::read_to_string(common::repo().join("tests/skin").join(name))
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.is_empty())
-        .skip(1)
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect()
+    common::fixture_rows(&format!("tests/skin/{name}"))
 }
 
 /// Relative difference, with an absolute floor for values near zero.

@@ -1,6 +1,8 @@
 //! The layered Monte Carlo engine against published values, conservation laws, and itself.
 //! Seeds are fixed; tolerances come from the estimators' standard errors.
 
+mod common;
+
 use baker::skin::{self, BodyLocation, Gender, MelaninInput, SkinParams, SkinType};
 use baker::spectral::WavelengthGrid;
 use baker::transport::{self, stack, Junction, Layer, McOptions, McResult, RadialGrid, Stack};
@@ -296,16 +298,8 @@ struct McmlRd {
 }
 
 fn mcml_rd() -> McmlRd {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/stacks/mcml_rd_r");
-    let rows = |name: &str| -> Vec<Vec<String>> {
-        std::fs::read_to_string(dir.join(name))
-            .unwrap()
-            .lines()
-            .filter(|l| !l.starts_with('#') && !l.is_empty())
-            .skip(1)
-            .map(|l| l.split(',').map(str::to_string).collect())
-            .collect()
-    };
+    let dir = common::repo().join("tests/stacks/mcml_rd_r");
+    let rows = |name: &str| common::fixture_rows(&format!("tests/stacks/mcml_rd_r/{name}"));
     let f = |s: &String| s.parse::<f64>().unwrap();
     let stack: transport::stack::StackFile =
         serde_json::from_str(&std::fs::read_to_string(dir.join("stack.json")).unwrap()).unwrap();

@@ -24,6 +24,16 @@ pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// The data rows of a fixture CSV under the repository root (the baker's CSV dialect:
+/// `#` comment lines), without its column-name row.
+pub fn fixture_rows(rel: &str) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(repo().join(rel)).unwrap();
+    baker::files::csv_rows::rows(&text)
+        .skip(1)
+        .map(|r| r.unwrap().fields.iter().map(str::to_string).collect())
+        .collect()
+}
+
 /// Runs the `baker` binary in the repository root.
 pub fn baker(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_baker"))
