@@ -300,4 +300,28 @@ mod tests {
             "{n:?} vs √(c ratio) {expected}"
         );
     }
+
+    /// Only bins inside each channel's 99 % energy radius (from the pilots' own Rd and Rd(r))
+    /// are held to the target: here 99 % of the energy lies within 1.47 mm, so the bins
+    /// centred at 0.25, 0.75 and 1.25 mm count and the five beyond do not, in each channel.
+    #[test]
+    fn constraints_stop_at_the_99_percent_radius() {
+        let bins = RadialBins::uniform(0.5, 8);
+        let energy = [0.6, 0.3, 0.095, 0.004, 0.0009, 0.00009, 0.000009, 0.000001];
+        let mut p = pilot(&bins, 1.0, 1.0, 10.0);
+        let n = p.photons as f64;
+        for (s, e) in p.sets[0].rd_r.iter_mut().zip(energy) {
+            *s = Sums {
+                sum: e * n,
+                sum2: 2.0 * e * e * n,
+            };
+        }
+        p.sets[0].rd.sum = energy.iter().sum::<f64>() * n;
+        let t = NoiseTarget {
+            r_max_mm: 100.0,
+            ..target(1_000, 0.05)
+        };
+        let c = constraints(&[p], &bins, &[[1.0, 1.0, 1.0]], &t);
+        assert_eq!(c.len(), 3 * 3);
+    }
 }

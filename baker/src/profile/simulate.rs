@@ -468,3 +468,49 @@ fn photon_counts(
 
 /// Seeds of the pilot runs differ from those of the main runs.
 const PILOT_TAG: u64 = 0x5049_4c4f_545f_5255; // "PILOT_RU"
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skin::{self, BodyLocation, Gender, MelaninInput, SkinParams, SkinType};
+    use crate::spectral::WavelengthGrid;
+
+    fn entry(t: SkinType, age: f64) -> OpticsEntry {
+        let p = SkinParams::new(
+            age,
+            Gender::Female,
+            BodyLocation::Face,
+            MelaninInput::SkinType(t),
+            0.5,
+        );
+        let grid = WavelengthGrid::uniform(450.0, 650.0, 100.0);
+        skin::document::entry("e", &p, &skin::evaluate(&p, &grid).unwrap())
+    }
+
+    /// Entries that differ only in absorption share one simulation with reuse; without it each
+    /// is its own group, and their groups' digests (part of the cache keys) differ, so two
+    /// such entries can never read each other's cached runs.
+    #[test]
+    fn groups_share_scattering_and_digests_tell_absorption_apart_without_reuse() {
+        let es = [
+            entry(SkinType::I, 30.0),
+            entry(SkinType::VI, 30.0),
+            entry(SkinType::I, 80.0),
+        ];
+        let shared = plan(&es, 3, true);
+        assert_eq!(shared.groups, vec![vec![0, 1], vec![2]]);
+        let own = plan(&es, 3, false);
+        assert_eq!(own.groups, vec![vec![0], vec![1], vec![2]]);
+        assert_ne!(own.digests[0], own.digests[1]);
+        assert_ne!(own.digests[0], shared.digests[0]);
+        assert_eq!(shared.digests.len(), 2);
+    }
+
+    /// Unit ids name the spec, the kind, the group and the wavelength (they appear in
+    /// `baker plan`, the progress events and the cache's roots).
+    #[test]
+    fn unit_ids_name_group_and_wavelength() {
+        assert_eq!(unit_id("db", "pilot/", 3, 550.0), "db/pilot/group3/550nm");
+        assert_eq!(unit_id("db", "", 0, 412.5), "db/group0/412.5nm");
+    }
+}
