@@ -57,6 +57,8 @@ PLANTED = [
      ".map(|w| std::f64::consts::PI * (w[1] * w[1] - w[0] * w[0]) * 1.05)", ["--test", "transport"]),
     ("Burley s(A): perpendicular cubic term 7|A-0.8|^3 -> 7|A-0.8|^2", "baker/src/export/burley/conventions.rs",
      "1.85 - a + 7.0 * (a - 0.8).abs().powi(3)", "1.85 - a + 7.0 * (a - 0.8).abs().powi(2)", ["--lib"]),
+    ("junction: a packet below J(x, y) ignores it when its step ends inside the planes", "baker/src/transport/engine.rs",
+     "if layer == *ju || layer == ju + 1);", "if layer == *ju || layer == ju * 1);", ["--test", "transport"]),
     ("cache key ignores the code digest", "baker/src/pipeline/mod.rs",
      "        h.update(code);\n", "", ["--lib"]),
 ]

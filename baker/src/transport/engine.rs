@@ -209,6 +209,26 @@ impl Prepared {
     }
 }
 
+impl Prepared {
+    /// Whether `pos` lies in `layer` as the geometry defines it: between its planes, and on
+    /// its side of the junction J(x, y) where the junction bounds it (within `tol_mm`, for
+    /// dips shorter than [`super::junction::MIN_STEP_MM`] the march does not resolve). Checked
+    /// by a `debug_assert!` at every interaction: a packet that missed a crossing is caught
+    /// wherever it next interacts.
+    pub(crate) fn holds(&self, layer: usize, pos: &[f64; 3], tol_mm: f64) -> bool {
+        let (mut lo, mut hi) = (self.z[layer], self.z[layer + 1]);
+        if let Some((ju, hf)) = &self.junction {
+            let j = hf.z(pos[0], pos[1]);
+            if layer == *ju {
+                hi = j;
+            } else if layer == ju + 1 {
+                lo = j;
+            }
+        }
+        pos[2] >= lo - tol_mm && pos[2] <= hi + tol_mm
+    }
+}
+
 /// The side of the junction below layer `ju` that `layer` lies on, in the sign convention of
 /// [`HeightField::hit`] (−1 above, in layer `ju`; +1 below, in `ju + 1`); `None` for other layers.
 #[inline(always)]
@@ -461,6 +481,11 @@ impl Packet {
         self.pos[2] += self.u[2] * step;
         self.s_left = 0.0;
         self.bounces = 0;
+        debug_assert!(
+            p.holds(layer, &self.pos, 1e-5),
+            "packet at {:?} is not in layer {layer}",
+            self.pos
+        );
         if WHITE {
             self.path[layer] += step;
             self.log_w_ref -= mua_ref[layer] * step;
