@@ -167,6 +167,34 @@ fn planar_junction_limit() {
     let planar = run(&s.clone_without_junction(), 200_000, 7);
     let se = (tiny.rd_se.powi(2) + planar.rd_se.powi(2)).sqrt();
     within(tiny.rd, planar.rd, 3.0 * se, "Rd, A = 10 nm vs planar");
+    // Packets entering at random points of the junction's period (as skin bakes trace them)
+    // score their exit relative to where they entered: Rd(r) of the 10 nm junction is the
+    // planar one, bin by bin, out to 1 mm (25 bins of 40 µm).
+    let mut o = McOptions::new(200_000, 9);
+    o.random_entry = true;
+    let spread = transport::run(&s, &o).unwrap();
+    let merge = |r: &McResult, k: usize| -> (f64, f64) {
+        let idx = 4 * k..4 * k + 4;
+        let w = |i: usize| (2 * i + 1) as f64;
+        let m =
+            idx.clone().map(|i| r.rd_r_per_mm2[i] * w(i)).sum::<f64>() / 16.0 / (2 * k + 1) as f64;
+        let se = idx
+            .map(|i| (r.rd_r_per_mm2_se[i] * w(i)).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / 16.0
+            / (2 * k + 1) as f64;
+        (m, se)
+    };
+    for k in 0..25 {
+        let ((a, sa), (b, sb)) = (merge(&spread, k), merge(&planar, k));
+        within(
+            a,
+            b,
+            4.0 * sa.hypot(sb),
+            &format!("Rd(r) bin {k} with random entry vs planar"),
+        );
+    }
     for i in 0..5 {
         let se = (tiny.absorbed_se[i].powi(2) + planar.absorbed_se[i].powi(2)).sqrt();
         within(tiny.absorbed[i], planar.absorbed[i], 3.0 * se, "absorbed");

@@ -758,3 +758,87 @@ pub fn run(stack: &Stack, o: &McOptions) -> anyhow::Result<McResult> {
         t0.elapsed().as_secs_f64(),
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::stats::chi2::chi2_test_1d;
+
+    /// Issue 22: a scattering event turns the direction by θ with cos θ drawn from
+    /// Henyey–Greenstein and by an azimuth uniform around the old direction, and keeps it a
+    /// unit vector: for vertical, oblique and nearly vertical incoming directions and g of both
+    /// signs, the cosine to the old direction against the HG density (χ²) and the azimuth
+    /// against the uniform one (χ², measured in a frame written out here).
+    #[test]
+    fn spin_turns_by_hg_and_a_uniform_azimuth() {
+        let mut rng = batch_rng(41, 0);
+        for g in [0.0, 0.8, -0.4] {
+            let hg = Hg::new(g);
+            for u0 in [
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0, -1.0],
+                [0.6, 0.0, 0.8],
+                [0.36, -0.48, -0.8],
+                [1e-4, 0.0, (1.0f64 - 1e-8).sqrt()],
+            ] {
+                let (mut cos, mut azi) = (Vec::new(), Vec::new());
+                // A frame around u0: e1 ⟂ u0 in the plane of u0 and x (or y), e2 = u0 × e1.
+                let pick = if u0[0].abs() < 0.9 {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0.0, 1.0, 0.0]
+                };
+                let d = pick[0] * u0[0] + pick[1] * u0[1] + pick[2] * u0[2];
+                let e1 = {
+                    let v = [
+                        pick[0] - d * u0[0],
+                        pick[1] - d * u0[1],
+                        pick[2] - d * u0[2],
+                    ];
+                    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                    [v[0] / n, v[1] / n, v[2] / n]
+                };
+                let e2 = [
+                    u0[1] * e1[2] - u0[2] * e1[1],
+                    u0[2] * e1[0] - u0[0] * e1[2],
+                    u0[0] * e1[1] - u0[1] * e1[0],
+                ];
+                for _ in 0..100_000 {
+                    let mut u = u0;
+                    spin(&mut u, &hg, &mut rng);
+                    let norm = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+                    assert!(
+                        (norm - 1.0).abs() < 1e-9,
+                        "|u|² = {norm} from {u0:?}, g {g}"
+                    );
+                    let c = u[0] * u0[0] + u[1] * u0[1] + u[2] * u0[2];
+                    cos.push(c);
+                    let (x, y) = (
+                        u[0] * e1[0] + u[1] * e1[1] + u[2] * e1[2],
+                        u[0] * e2[0] + u[1] * e2[1] + u[2] * e2[2],
+                    );
+                    if 1.0 - c * c > 1e-6 {
+                        azi.push(y.atan2(x));
+                    }
+                }
+                let name = format!("spin_g{g}_{:.2}_{:.2}_{:.2}", u0[0], u0[1], u0[2]);
+                chi2_test_1d(
+                    &cos,
+                    -1.0,
+                    1.0,
+                    41,
+                    |c| crate::transport::phase::hg_pdf(g, c),
+                    &name,
+                );
+                chi2_test_1d(
+                    &azi,
+                    -std::f64::consts::PI,
+                    std::f64::consts::PI,
+                    37,
+                    |_| 0.5 / std::f64::consts::PI,
+                    &format!("{name}_azimuth"),
+                );
+            }
+        }
+    }
+}
