@@ -39,6 +39,18 @@ fn within(value: f64, reference: f64, tol: f64, what: &str) {
     );
 }
 
+/// The rates `baker mc` reports are the counts over the run's wall time.
+#[test]
+fn reported_rates_are_counts_over_seconds() {
+    let r = run(&slab(1.4, 1.0, 1.0, 0.1, 10.0, 0.5), 20_000, 2);
+    assert_eq!(r.photons, 20_000);
+    assert!(r.seconds > 0.0);
+    assert!((r.photons_per_s * r.seconds / r.photons as f64 - 1.0).abs() < 1e-9);
+    let events = r.scattering_events as f64;
+    assert!(events > 20_000.0);
+    assert!((r.scattering_events_per_s * r.seconds / events - 1.0).abs() < 1e-9);
+}
+
 /// Wang, Jacques & Zheng (1995), Table 2: μa = 1, μs = 9 mm⁻¹, g = 0.75, d = 0.2 mm, n = 1
 /// (van de Hulst's tabulated Rd = 0.09739, Tt = 0.66096).
 #[test]

@@ -132,7 +132,7 @@ impl Stack {
             return Err(StackError::Global {
                 field: "grid.nr",
                 value: self.grid.nr as f64,
-                allowed: "[1, 1000000]",
+                allowed: "[1, 100000]",
             });
         }
         let last = self.layers.len() - 1;
@@ -391,5 +391,79 @@ mod tests {
             format!("{:?}", RadialGrid::default()),
             "Grid { dr_mm: 0.01, nr: 500 }"
         );
+    }
+
+    fn slab() -> Stack {
+        Stack {
+            n_above: 1.0,
+            n_below: 1.0,
+            layers: vec![Layer {
+                name: "slab".into(),
+                d_mm: 1.0,
+                eta: 1.4,
+                mua_per_mm: 0.1,
+                mus_per_mm: 10.0,
+                g: 0.5,
+            }],
+            junction: None,
+            grid: RadialGrid::default(),
+        }
+    }
+
+    /// The ranges `validate` allows, at their edges: what is inside passes, the first value
+    /// outside names its field and range.
+    #[test]
+    fn validation_accepts_the_edges_and_refuses_beyond() {
+        let ok = |f: &dyn Fn(&mut Stack)| {
+            let mut s = slab();
+            f(&mut s);
+            s.validate()
+        };
+        assert!(ok(&|s| s.grid.nr = 100_000).is_ok());
+        let e = ok(&|s| s.grid.nr = 100_001).unwrap_err().to_string();
+        assert!(e.contains("grid.nr") && e.contains("[1, 100000]"), "{e}");
+        assert!(ok(&|s| s.grid.nr = 0).is_err());
+        assert!(ok(&|s| s.layers[0].eta = 1.0).is_ok());
+        assert!(ok(&|s| s.layers[0].eta = 5.0).is_ok());
+        assert!(ok(&|s| s.layers[0].eta = 5.0001).is_err());
+        assert!(ok(&|s| s.layers[0].eta = 0.9999).is_err());
+        assert!(ok(&|s| s.layers[0].g = 0.999).is_ok());
+        assert!(ok(&|s| s.layers[0].g = 1.0)
+            .unwrap_err()
+            .to_string()
+            .contains("(-1, 1)"));
+        assert!(ok(&|s| s.layers[0].g = -1.0).is_err());
+        assert!(ok(&|s| s.layers[0].mua_per_mm = 0.0).is_ok());
+        assert!(ok(&|s| s.layers[0].mua_per_mm = -1e-9).is_err());
+        assert!(ok(&|s| s.layers[0].mus_per_mm = -1e-9).is_err());
+        assert!(ok(&|s| s.grid.dr_mm = 0.0).is_err());
+        assert!(ok(&|s| s.layers[0].d_mm = f64::INFINITY).is_ok());
+        assert!(ok(&|s| {
+            s.layers[0].d_mm = f64::INFINITY;
+            s.layers[0].mua_per_mm = 0.0;
+            s.layers[0].mus_per_mm = 0.0;
+        })
+        .is_err());
+    }
+
+    /// The three-layer model (§3.6.1) has a flat junction even where Eq. 1's amplitude is not
+    /// zero: its stack carries none.
+    #[test]
+    fn three_layer_stacks_are_flat() {
+        let grid = WavelengthGrid::uniform(500.0, 600.0, 50.0);
+        let mut p = SkinParams::new(
+            30.0,
+            Gender::Female,
+            BodyLocation::Forearm,
+            MelaninInput::SkinType(SkinType::II),
+            0.5,
+        );
+        p.model = crate::skin::ModelKind::ThreeLayer;
+        let e = skin::document::entry("e", &p, &skin::evaluate(&p, &grid).unwrap());
+        assert_eq!(e.model, "three_layer");
+        let mut forced = e.clone();
+        forced.junction.amplitude_mm = 0.05;
+        assert!(from_skin(&forced, 0).junction.is_none());
+        assert_eq!(from_skin(&forced, 0).layers.len(), 3);
     }
 }
