@@ -522,6 +522,63 @@ mod tests {
         assert_eq!(compared, 3000);
     }
 
+    /// The root finders converge superlinearly, as their comments claim: Newton's method inside
+    /// its bracket and the Illinois variant of regula falsi each need a handful of evaluations
+    /// to reach the 10⁻¹⁰ mm tolerance. A guard that falls back to bisection on every step, or a
+    /// halving applied to the wrong end (plain regula falsi stalls), still finds the root but
+    /// costs several times the evaluations, which the photon allocation pays for.
+    #[test]
+    fn root_finders_converge_in_few_evaluations() {
+        // Newton from a bracket [0, 2] on g = 0.7 − t − 0.3·sin 2t (root ≈ 0.4466, found by
+        // bisection here): |g″| ≤ 1.2 bounds the curvature, the slope is known at t = 0.
+        let evals = std::cell::Cell::new(0u32);
+        let g_and_slope = |t: f64| {
+            evals.set(evals.get() + 1);
+            (
+                0.7 - t - 0.3 * (2.0 * t).sin(),
+                -1.0 - 0.6 * (2.0 * t).cos(),
+            )
+        };
+        let (mut a, mut b) = (0.0f64, 2.0f64);
+        while b - a > 1e-14 {
+            let m = 0.5 * (a + b);
+            if g_and_slope(m).0 >= 0.0 {
+                a = m
+            } else {
+                b = m
+            }
+        }
+        evals.set(0);
+        let root = a;
+        let t = polish(
+            &g_and_slope,
+            &Bounds::new(1.2),
+            0.0,
+            (0.7, -1.6),
+            (0.0, 2.0),
+        );
+        assert!(
+            (t - root).abs() <= 2.0 * ROOT_TOL_MM && t <= root + 1e-14,
+            "{t} {root}"
+        );
+        let newton = evals.get();
+        // Illinois on a curved g whose plain regula falsi keeps one end fixed for many steps.
+        evals.set(0);
+        let g = |t: f64| {
+            evals.set(evals.get() + 1);
+            (1.0 - t).powi(3) - 0.1
+        };
+        let root = 1.0 - 0.1f64.cbrt();
+        let t = refine(&g, (0.0, g(0.0)), (2.0, g(2.0)));
+        let illinois = evals.get() - 2;
+        assert!(
+            (t - root).abs() <= 2.0 * ROOT_TOL_MM && t <= root,
+            "{t} {root}"
+        );
+        assert!(newton <= 4, "Newton took {newton} evaluations (3 expected)");
+        assert!(illinois <= 12, "Illinois took {illinois} evaluations (10 expected)");
+    }
+
     #[test]
     fn normal_is_perpendicular_to_the_surface() {
         let f = field();
