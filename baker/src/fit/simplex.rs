@@ -98,6 +98,26 @@ mod tests {
         assert!(x[0] < -1e6, "{x:?}");
     }
 
+    /// The contraction follows Lagarias et al. (1998): outside (c − ½(w − c)) when the
+    /// reflected point beats the worst one, inside (c + ½(w − c)) when it does not. In one
+    /// dimension on |x − 0.3| the fourth evaluated point is that contraction.
+    #[test]
+    fn contracts_outside_or_inside_as_lagarias_et_al() {
+        let fourth = |x0: f64, step: f64| {
+            let mut seen = Vec::new();
+            let mut f = |x: &[f64]| {
+                seen.push(x[0]);
+                (x[0] - 0.3).abs()
+            };
+            nelder_mead(&mut f, &[x0], step, 4, 0.0);
+            seen[3]
+        };
+        // Points −1 (1.3) and 0.2 (0.1): reflected 1.4 (1.1 < 1.3), outside contraction 0.8.
+        assert!((fourth(-1.0, 1.2) - 0.8).abs() < 1e-12);
+        // Points −1 (1.3) and 0.5 (0.2): reflected 2.0 (1.7 ≥ 1.3), inside contraction −0.25.
+        assert!((fourth(-1.0, 1.5) + 0.25).abs() < 1e-12);
+    }
+
     /// Contraction and shrink: from a simplex far too large around a narrow minimum of |x|,
     /// the search still closes in on 0.
     #[test]

@@ -576,7 +576,10 @@ mod tests {
             "{t} {root}"
         );
         assert!(newton <= 4, "Newton took {newton} evaluations (3 expected)");
-        assert!(illinois <= 12, "Illinois took {illinois} evaluations (10 expected)");
+        assert!(
+            illinois <= 12,
+            "Illinois took {illinois} evaluations (10 expected)"
+        );
     }
 
     #[test]
