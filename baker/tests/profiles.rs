@@ -326,6 +326,14 @@ fn the_profile_integrates_to_the_total_inside_the_grid() {
         "{:?}",
         r.r99_mm
     );
+    // The fit has the Gaussians asked for, and stops when its flag is set.
+    let colour = ColourMap::new(&[600.0]);
+    let three = profile::rgb_profile(p, &colour, 3, baker::cancel::Cancel::NEVER).unwrap();
+    assert_eq!(three.fit.variance_mm2.len(), 3);
+    assert_eq!(three.fit.weight_rgb.len(), 3);
+    let (flag, cancel) = baker::cancel::Cancel::fresh();
+    flag.store(true, std::sync::atomic::Ordering::Relaxed);
+    assert!(profile::rgb_profile(p, &colour, 3, cancel).is_err());
 }
 
 fn read(p: &Path) -> Vec<u8> {
