@@ -15,6 +15,8 @@ struct Baked {
     names: Vec<String>,
     spectral: Vec<SpectralProfile>,
     rgb: Vec<RgbProfile>,
+    /// (done, total) of every progress report, in order.
+    progress: Vec<(usize, usize)>,
 }
 
 /// Bakes every entry of `yaml` in memory, with `reuse` as asked.
@@ -44,7 +46,18 @@ fn bake_with(yaml: &str, reuse: bool, o: &SimOptions) -> Baked {
         .collect();
     let bins = RadialBins::fine_then_log(0.01, 1.1, 40.0);
     let plan = profile::plan(&entries, lam.len(), reuse);
-    let spectral = profile::simulate(&entries, lam, &bins, &plan, o, |_, _, _| {}).unwrap();
+    let mut progress = Vec::new();
+    let spectral = profile::simulate(&entries, lam, &bins, &plan, o, |done, total, _| {
+        progress.push((done, total))
+    })
+    .unwrap();
+    // One progress report per (group, wavelength) task, counting 1, 2, … up to the total.
+    let total = progress.last().map_or(0, |p| p.1);
+    assert!(total > 0);
+    assert_eq!(
+        progress,
+        (1..=total).map(|d| (d, total)).collect::<Vec<_>>()
+    );
     let colour = ColourMap::new(lam);
     let rgb = spectral
         .iter()
@@ -54,6 +67,7 @@ fn bake_with(yaml: &str, reuse: bool, o: &SimOptions) -> Baked {
         names: entries.iter().map(|e| e.name.clone()).collect(),
         spectral,
         rgb,
+        progress,
     }
 }
 
@@ -326,6 +340,8 @@ fn the_profile_integrates_to_the_total_inside_the_grid() {
         "{:?}",
         r.r99_mm
     );
+    // One progress report per (group, wavelength) task, counting up to the total.
+    assert_eq!(b.progress, vec![(1, 1)]);
     // The fit has the Gaussians asked for, and stops when its flag is set.
     let colour = ColourMap::new(&[600.0]);
     let three = profile::rgb_profile(p, &colour, 3, baker::cancel::Cancel::NEVER).unwrap();
