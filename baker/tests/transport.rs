@@ -267,6 +267,9 @@ fn absorption_reuse_matches_direct_simulation() {
         for (s, seed) in [(&light, 200), (&dark, 300)] {
             let reused = white.apply(&mua(s));
             let direct = run(s, 100_000, seed + k as u64);
+            // The specular reflection is the same Fresnel value in both.
+            assert!(direct.rsp > 0.0);
+            assert_eq!(reused.rsp, direct.rsp);
             for (name, w, d, sw, sd) in [
                 ("Rd", reused.rd, direct.rd, reused.rd_se, direct.rd_se),
                 ("Tt", reused.tt, direct.tt, reused.tt_se, direct.tt_se),

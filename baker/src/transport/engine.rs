@@ -764,6 +764,83 @@ mod tests {
     use super::*;
     use crate::stats::chi2::chi2_test_1d;
 
+    /// Scores nothing but what roulette adds.
+    struct RouletteOnly(f64);
+    impl Scorer for RouletteOnly {
+        fn absorb(&mut self, _: usize, _: f64, _: &[f64; 3]) {}
+        fn escape(&mut self, _: &Exit) {}
+        fn lost(&mut self, _: f64) {}
+        fn roulette(&mut self, dw: f64) {
+            self.0 += dw;
+        }
+        fn photon_done(&mut self) {}
+    }
+
+    /// Russian roulette is unbiased in both modes: over many packets below the threshold the
+    /// surviving weight averages the weight before (survival 1/10, weight ×10), within 4 SE;
+    /// a white packet keeps ln w_ref in step with its weight, and direct runs score exactly
+    /// what roulette added.
+    #[test]
+    fn roulette_keeps_the_expected_weight() {
+        let mut rng = batch_rng(43, 0);
+        let p = Prepared::new(&Stack {
+            n_above: 1.0,
+            n_below: 1.0,
+            layers: vec![crate::transport::Layer {
+                name: "slab".into(),
+                d_mm: 1.0,
+                eta: 1.0,
+                mua_per_mm: 1.0,
+                mus_per_mm: 1.0,
+                g: 0.0,
+            }],
+            junction: None,
+            grid: crate::transport::RadialGrid {
+                dr_mm: 0.01,
+                nr: 10,
+            },
+        })
+        .unwrap();
+        for white in [false, true] {
+            let n = 200_000;
+            let w0 = 5e-5;
+            let (mut sum, mut sum2, mut survivors) = (0.0, 0.0, 0);
+            let mut scored = RouletteOnly(0.0);
+            for _ in 0..n {
+                let mut k = Packet::launch(&p, &mut rng);
+                k.w = w0;
+                k.log_w_ref = (w0 * 100.0f64).ln() - 5.0; // below the white threshold, 10⁻²
+                let before = k.log_w_ref;
+                let alive = if white {
+                    k.roulette::<true, _>(WHITE_ROULETTE_WEIGHT.ln(), &mut rng, &mut scored)
+                } else {
+                    k.roulette::<false, _>(ROULETTE_WEIGHT.ln(), &mut rng, &mut scored)
+                };
+                let w = if alive { k.w } else { 0.0 };
+                if alive {
+                    survivors += 1;
+                    if white {
+                        let grown = k.log_w_ref - before;
+                        assert!((grown - 10f64.ln()).abs() < 1e-12 && (w / w0 - 10.0).abs() < 1e-9);
+                    }
+                }
+                sum += w;
+                sum2 += w * w;
+            }
+            let mean = sum / n as f64;
+            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            assert!(survivors > 0 && survivors < n / 5, "{survivors}");
+            assert!(
+                (mean - w0).abs() < 4.0 * se,
+                "white {white}: {mean} vs {w0} ± {se}"
+            );
+            if !white {
+                // What roulette added equals the weight change, to rounding.
+                assert!((scored.0 - (sum - n as f64 * w0)).abs() < 1e-9 * n as f64 * w0);
+            }
+        }
+    }
+
     /// Issue 22: a scattering event turns the direction by θ with cos θ drawn from
     /// Henyey–Greenstein and by an azimuth uniform around the old direction, and keeps it a
     /// unit vector: for vertical, oblique and nearly vertical incoming directions and g of both
