@@ -7,6 +7,12 @@ One line per results folder (module): mutants tested, caught, timed out, missed,
 and the score = (caught + timeout) / (caught + timeout + missed), the share of viable mutants
 the tests catch, with a 95 % Wilson interval (a sample of a module's mutants, e.g.
 `--shard 0/16`, estimates the whole module's score). `--missed` lists the surviving mutants.
+
+`--sizes skin=490,transport=1858,…` (each module's mutant count, `run.sh MODULE --list | wc -l`)
+adds the stratified score over all those modules: each module's sampled score weighted by its
+size, Σ Wₘ pₘ with Wₘ = Nₘ / ΣN, and a 95 % interval from Σ Wₘ² p̃ₘ(1 − p̃ₘ)/nₘ with the
+Agresti–Coull p̃ = (k + 2)/(n + 4) (a module whose sample caught everything still has
+uncertainty). The pooled "all" line weights modules by how many of their mutants were sampled.
 """
 
 import json
@@ -28,6 +34,13 @@ def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
 def main() -> int:
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     show_missed = "--missed" in sys.argv
+    sizes = {}
+    for a in sys.argv[1:]:
+        if a.startswith("--sizes="):
+            for kv in a.split("=", 1)[1].split(","):
+                k, v = kv.split("=")
+                sizes[k] = int(v)
+    per_module = {}
     if not args:
         print(__doc__)
         return 2
@@ -43,6 +56,9 @@ def main() -> int:
         c, t, m, u = o["caught"], o["timeout"], o["missed"], o["unviable"]
         for k, v in zip(tot, (c, t, m, u)):
             tot[k] += v
+        module = name.split("-")[-1]
+        k0, n0 = per_module.get(module, (0, 0))
+        per_module[module] = (k0 + c + t, n0 + c + t + m)
         viable = c + t + m
         lo, hi = wilson(c + t, viable)
         score = (c + t) / viable if viable else float("nan")
@@ -56,6 +72,22 @@ def main() -> int:
     if viable:
         print(f"{'all':<12} {viable + tot['unviable']:>6} {tot['caught']:>6} {tot['timeout']:>7} {tot['missed']:>6} "
               f"{tot['unviable']:>8} {(tot['caught'] + tot['timeout']) / viable:>7.1%}  [{lo:.1%}, {hi:.1%}]")
+    if sizes:
+        missing = [m for m in sizes if m not in per_module or per_module[m][1] == 0]
+        if missing:
+            print(f"stratified: no sample for {', '.join(missing)}")
+            return 1
+        total = sum(sizes.values())
+        est, var = 0.0, 0.0
+        for m, size in sizes.items():
+            k, n = per_module[m]
+            w = size / total
+            est += w * k / n
+            pt = (k + 2) / (n + 4)
+            var += w * w * pt * (1 - pt) / n
+        h = 1.96 * math.sqrt(var)
+        print(f"stratified over {len(sizes)} modules ({total} mutants): {est:.1%}  "
+              f"[{max(0.0, est - h):.1%}, {min(1.0, est + h):.1%}]")
     return 0
 
 
