@@ -355,3 +355,49 @@ pub fn run_white_sets(
     all.seconds = t0.elapsed().as_secs_f64();
     Ok(all)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transport::{Layer, RadialGrid};
+
+    /// Hostile absorption sets are refused with the set, the layer and the value: negative,
+    /// NaN and infinite μa, a wrong length, none at all, and no absorption in a semi-infinite
+    /// last layer.
+    #[test]
+    fn absorption_sets_are_checked() {
+        let stack = |d_mm: f64| Stack {
+            n_above: 1.0,
+            n_below: 1.0,
+            layers: vec![Layer {
+                name: "dermis".into(),
+                d_mm,
+                eta: 1.4,
+                mua_per_mm: 0.1,
+                mus_per_mm: 10.0,
+                g: 0.8,
+            }],
+            junction: None,
+            grid: RadialGrid {
+                dr_mm: 0.01,
+                nr: 10,
+            },
+        };
+        let finite = stack(1.0);
+        assert!(check_sets(&finite, &[vec![0.0], vec![2.5]]).is_ok());
+        for bad in [-0.1, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let e = check_sets(&finite, &[vec![0.1], vec![bad]]).unwrap_err();
+            assert!(
+                e.contains("absorption set 1, layer 0") && e.contains("finite and >= 0"),
+                "{bad}: {e}"
+            );
+        }
+        assert!(check_sets(&finite, &[vec![0.1, 0.2]])
+            .unwrap_err()
+            .contains("2 values for 1 layers"));
+        assert!(check_sets(&finite, &[]).is_err());
+        let e = check_sets(&stack(f64::INFINITY), &[vec![0.1], vec![0.0]]).unwrap_err();
+        assert!(e.contains("dermis is semi-infinite"), "{e}");
+        assert!(check_sets(&stack(f64::INFINITY), &[vec![0.1]]).is_ok());
+    }
+}

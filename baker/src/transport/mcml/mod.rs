@@ -75,6 +75,17 @@ mod tests {
         assert_eq!(runs[1].threshold_weight, 1e-4);
     }
 
+    /// MCML 1.x's grid spacing must be positive in both directions.
+    #[test]
+    fn grid_spacings_must_be_positive() {
+        let mci = "1.0 # file version\n1 # runs\n\nout.mco A\n10\n20E-4 20E-4\n10 20 30\n1\n1.0\n1.37 1 100 0.9 0.1\n1.0\n";
+        assert!(parse_mci(mci).is_ok());
+        for bad in ["0 20E-4", "20E-4 0", "-1E-3 20E-4", "20E-4 -1E-3"] {
+            let e = parse_mci(&mci.replace("20E-4 20E-4", bad)).unwrap_err();
+            assert!(e.contains("line 6: dz and dr must be > 0"), "{bad}: {e}");
+        }
+    }
+
     #[test]
     fn reports_the_line_of_a_bad_value() {
         let e = parse_mci("1.0\n1\nout.mco A\nmany\n").unwrap_err();
