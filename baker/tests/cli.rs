@@ -406,6 +406,15 @@ fn mc_reads_mci_and_writes_mco() {
         "∫Rd_r = {rd}, Rd = {}",
         rat[1]
     );
+    // Σ A_z·dz over the depth grid (the last bin holds what lies deeper) equals A, to the
+    // five digits MCML prints.
+    let dz = 0.002;
+    let a: f64 = get("A_z").iter().sum::<f64>() * dz;
+    assert!(
+        (a - rat[2]).abs() < 2e-4 * rat[2] + 1e-6,
+        "∫A_z = {a}, A = {}",
+        rat[2]
+    );
     // Benchmark slab, 20,000 photons: Rd and Tt near van de Hulst's values.
     assert!((rat[1] - 0.09739).abs() < 0.01 && (rat[3] - 0.66096).abs() < 0.01);
     // As in MCML, Rsp is the analytic specular reflectance; light reflected back without
