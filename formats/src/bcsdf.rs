@@ -789,6 +789,17 @@ fn pick(cdf: &[f64], u: f64) -> (usize, f64) {
 mod tests {
     use super::*;
 
+    /// The `wi_map` bits are the ones FORMAT.md documents (every other reader decodes by it):
+    /// 2³¹ flips θo, 2³⁰ flips Δφ, the 30 bits below hold the stored index.
+    #[test]
+    fn wi_map_flags_are_the_documented_bits() {
+        let doc = include_str!("../FORMAT.md");
+        assert!(doc.contains("stored index | 2³¹ if θo changes sign | 2³⁰ if Δφ changes sign"));
+        assert_eq!(FLIP_THETA, 2u32.pow(31));
+        assert_eq!(FLIP_DPHI, 2u32.pow(30));
+        assert_eq!(INDEX_MASK, 2u32.pow(30) - 1);
+    }
+
     /// A small file: res 30°, 2 stored ωi, 1 variant, 2 channels, z-mirror map.
     fn small(dtype: Precision) -> (Vec<u8>, Vec<Vec<f64>>) {
         let res = 30.0;
