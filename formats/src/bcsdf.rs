@@ -913,6 +913,76 @@ mod tests {
         assert!(f.decode(1).is_err());
     }
 
+    /// Round-to-nearest, ties to even, of a positive normal `x` to `keep` mantissa bits, in f64
+    /// arithmetic (independent of the bit tricks): the quantum is 2^(e − keep) for 2^e ≤ x.
+    fn nearest_even(x: f64, keep: i32) -> f64 {
+        let e = x.log2().floor() as i32;
+        let q = 2f64.powi(e - keep);
+        let t = x / q;
+        let f = t.floor();
+        let r = if t - f > 0.5 || (t - f == 0.5 && f % 2.0 == 1.0) {
+            f + 1.0
+        } else {
+            f
+        };
+        r * q
+    }
+
+    /// Bit rounding in f32 and f16 equals round-to-nearest-even at the kept bits, for every
+    /// kept-bit count, on random values and on exact ties; `encode_slice` stores what it says
+    /// a reader decodes, byte-shuffled, scaled by each part's maximum.
+    #[test]
+    fn bitround_is_round_to_nearest_even() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for keep in 1..23u32 {
+            for k in 0..2_000u32 {
+                let x = if k % 2 == 0 {
+                    f32::from_bits(0x3000_0000 + (next() as u32 % 0x1800_0000))
+                } else {
+                    // An exact tie: the dropped bits are 1000…0.
+                    let m = (next() as u32 & 0x007F_FFFF) >> (23 - keep) << (23 - keep);
+                    f32::from_bits(0x3F80_0000 | m | 1 << (22 - keep))
+                };
+                let want = nearest_even(x as f64, keep as i32) as f32;
+                assert_eq!(round_f32(x, keep), want, "f32 {x:e}, {keep} bits");
+            }
+        }
+        for keep in 1..10u32 {
+            for h in (0x0400u16..0x7C00).step_by(7) {
+                let x = half::f16::from_bits(h).to_f64();
+                let want = half::f16::from_f64(nearest_even(x, keep as i32));
+                assert_eq!(
+                    round_f16_bits(h, keep),
+                    want.to_bits(),
+                    "f16 {x:e}, {keep} bits"
+                );
+            }
+        }
+        let values: Vec<f64> = (0..64).map(|i| ((i * 37) % 29) as f64 * 0.013).collect();
+        for dtype in [Precision::F16, Precision::F32] {
+            let (scales, raw, decoded) = encode_slice(&values, 2, dtype, 6);
+            for (k, part) in values.chunks(32).enumerate() {
+                assert_eq!(
+                    scales[k] as f64,
+                    part.iter().copied().fold(0.0, f64::max) as f32 as f64
+                );
+            }
+            assert_eq!(decode_values(&raw, dtype, &scales, 32), decoded);
+            for (x, d) in values.iter().zip(&decoded) {
+                assert!((*d as f64 - x).abs() <= 2f64.powi(-7) * x + 1e-9, "{x} {d}");
+            }
+        }
+        // An all-zero part (a fully absorbed channel) stores zeros with scale 1, not 0/0.
+        let (scales, _, decoded) = encode_slice(&[0.0; 8], 1, Precision::F16, 6);
+        assert_eq!((scales, decoded), (vec![1.0], vec![0.0; 8]));
+    }
+
     #[test]
     fn bitround_keeps_the_requested_precision() {
         for &x in &[1.0f32, 0.123_456_7, 3.3e-5, 47_000.0] {
