@@ -856,6 +856,65 @@ mod tests {
         (w.finish().unwrap(), slices)
     }
 
+    /// Sampling draws ωo with the tabulated density: the (θo, Δφ) bins of 40,000 samples
+    /// against each bin's p·ΔΩ from `pdf` at its centre (χ², bound dof + 5·√(2·dof)), empty
+    /// bins never drawn, for a stored ωi, its z-mirror and an ωi along the x axis.
+    #[test]
+    fn samples_follow_the_tabulated_density() {
+        let (bytes, _) = small(Precision::F32);
+        let f = Bcsdf::from_bytes(bytes).unwrap();
+        let g = f.dir.grid();
+        let (nt, np) = (f.dir.n_theta, f.dir.n_phi);
+        let res = f.dir.res_deg.to_radians();
+        let mut state = 12_345u64;
+        let mut u = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for wi in [
+            direction((-80f64).to_radians(), 20f64.to_radians()),
+            direction(80f64.to_radians(), 20f64.to_radians()),
+            [1.0, 0.0, 0.0],
+        ] {
+            let phi_i = angles(wi).1;
+            let n = 40_000;
+            let mut count = vec![0u32; nt * np];
+            for _ in 0..n {
+                let s = f.sample(wi, 0, u(), u()).unwrap().unwrap();
+                assert!(s.pdf > 0.0);
+                let (t, p) = angles(s.wo);
+                let (it, jp) = g.cell(t, p - phi_i);
+                count[it * np + jp] += 1;
+            }
+            let (mut chi2, mut dof, mut total) = (0.0, 0usize, 0.0);
+            for it in 0..nt {
+                for jp in 0..np {
+                    let wo = direction(
+                        g.theta_lower_rad(it) + 0.5 * res,
+                        phi_i - PI + (jp as f64 + 0.5) * res,
+                    );
+                    let p = f.pdf(wi, wo, 0).unwrap() * g.solid_angle(it);
+                    total += p;
+                    let (c, e) = (count[it * np + jp] as f64, p * n as f64);
+                    if e == 0.0 {
+                        assert_eq!(c, 0.0, "an empty bin was drawn");
+                        continue;
+                    }
+                    chi2 += (c - e).powi(2) / e;
+                    dof += 1;
+                }
+            }
+            assert!((total - 1.0).abs() < 1e-6, "Σ p·ΔΩ = {total}");
+            let k = (dof - 1) as f64;
+            assert!(
+                chi2 < k + 5.0 * (2.0 * k).sqrt(),
+                "χ² {chi2} over {dof} bins"
+            );
+        }
+    }
+
     #[test]
     fn roundtrip_eval_albedo_area_and_flags() {
         let (bytes, slices) = small(Precision::F32);
