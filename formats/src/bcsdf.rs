@@ -802,6 +802,11 @@ mod tests {
 
     /// A small file: res 30°, 2 stored ωi, 1 variant, 2 channels, z-mirror map.
     fn small(dtype: Precision) -> (Vec<u8>, Vec<Vec<f64>>) {
+        small_with_total(dtype, 1.0)
+    }
+
+    /// [`small`] with Σ f̂·ΔΩ = `total` in every slice and channel instead of 1.
+    fn small_with_total(dtype: Precision, total: f64) -> (Vec<u8>, Vec<Vec<f64>>) {
         let res = 30.0;
         let (nt, np) = (6, 12);
         let wi_deg = vec![[-75.0, 15.0], [-15.0, 15.0]];
@@ -847,7 +852,7 @@ mod tests {
                     tot += x * solid_angle(res, b / np);
                 }
                 for b in 0..nt * np {
-                    v[k * nt * np + b] /= tot;
+                    v[k * nt * np + b] *= total / tot;
                 }
             }
             w.push(&v).unwrap();
@@ -856,12 +861,35 @@ mod tests {
         (w.finish().unwrap(), slices)
     }
 
+    /// Directions along every axis (and any length) are valid; zero, infinite and NaN
+    /// components are refused.
+    #[test]
+    fn directions_are_checked() {
+        for w in [
+            [1.0, 0.0, 0.0],
+            [0.0, -2.0, 0.0],
+            [0.0, 0.0, 1e-3],
+            [0.3, -0.4, 0.5],
+        ] {
+            assert!(check_dir(w).is_ok(), "{w:?}");
+        }
+        for w in [
+            [0.0; 3],
+            [f64::INFINITY, 0.0, 0.0],
+            [0.0, f64::NAN, 1.0],
+            [1e200, 1e200, 0.0],
+        ] {
+            assert!(check_dir(w).is_err(), "{w:?}");
+        }
+    }
+
     /// Sampling draws ωo with the tabulated density: the (θo, Δφ) bins of 40,000 samples
     /// against each bin's p·ΔΩ from `pdf` at its centre (χ², bound dof + 5·√(2·dof)), empty
     /// bins never drawn, for a stored ωi, its z-mirror and an ωi along the x axis.
     #[test]
     fn samples_follow_the_tabulated_density() {
-        let (bytes, _) = small(Precision::F32);
+        // Not normalised to 1 (the CDFs must normalise), channels of different shapes.
+        let (bytes, _) = small_with_total(Precision::F32, 0.37);
         let f = Bcsdf::from_bytes(bytes).unwrap();
         let g = f.dir.grid();
         let (nt, np) = (f.dir.n_theta, f.dir.n_phi);
