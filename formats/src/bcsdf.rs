@@ -909,13 +909,26 @@ mod tests {
             let phi_i = angles(wi).1;
             let n = 40_000;
             let mut count = vec![0u32; nt * np];
+            // Within its bin a sample is uniform in solid angle: sin θo and Δφ uniform.
+            let mut within = [0u32; 16];
             for _ in 0..n {
                 let s = f.sample(wi, 0, u(), u()).unwrap().unwrap();
                 assert!(s.pdf > 0.0);
                 let (t, p) = angles(s.wo);
                 let (it, jp) = g.cell(t, p - phi_i);
                 count[it * np + jp] += 1;
+                let t0 = g.theta_lower_rad(it);
+                let a = (t.sin() - t0.sin()) / ((t0 + res).sin() - t0.sin());
+                let dphi = (p - phi_i + PI).rem_euclid(2.0 * PI) - PI;
+                let b = (dphi + PI) / res - jp as f64;
+                within[((a * 4.0) as usize).min(3) * 4 + ((b * 4.0) as usize).min(3)] += 1;
             }
+            let e = n as f64 / 16.0;
+            let chi2_within: f64 = within.iter().map(|&c| (c as f64 - e).powi(2) / e).sum();
+            assert!(
+                chi2_within < 15.0 + 5.0 * 30f64.sqrt(),
+                "within bins: {within:?}"
+            );
             let (mut chi2, mut dof, mut total) = (0.0, 0usize, 0.0);
             for it in 0..nt {
                 for jp in 0..np {
