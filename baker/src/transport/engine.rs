@@ -783,23 +783,18 @@ mod tests {
     #[test]
     fn roulette_keeps_the_expected_weight() {
         let mut rng = batch_rng(43, 0);
-        let p = Prepared::new(&Stack {
-            n_above: 1.0,
-            n_below: 1.0,
-            layers: vec![crate::transport::Layer {
+        let p = Prepared::new(&Stack::in_air(
+            crate::transport::Layer {
                 name: "slab".into(),
                 d_mm: 1.0,
                 eta: 1.0,
                 mua_per_mm: 1.0,
                 mus_per_mm: 1.0,
                 g: 0.0,
-            }],
-            junction: None,
-            grid: crate::transport::RadialGrid {
-                dr_mm: 0.01,
-                nr: 10,
             },
-        })
+            0.01,
+            10,
+        ))
         .unwrap();
         for white in [false, true] {
             let n = 200_000;

@@ -314,6 +314,21 @@ pub fn from_skin(e: &formats::OpticsEntry, i: usize) -> Stack {
     }
 }
 
+/// Tests' shorthand: `layer` alone between two index-1 media, no junction, on `nr` annuli of
+/// `dr_mm`.
+#[cfg(test)]
+impl Stack {
+    pub(crate) fn in_air(layer: Layer, dr_mm: f64, nr: usize) -> Stack {
+        Stack {
+            n_above: 1.0,
+            n_below: 1.0,
+            layers: vec![layer],
+            junction: None,
+            grid: RadialGrid { dr_mm, nr },
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -359,29 +359,26 @@ pub fn run_white_sets(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::transport::{Layer, RadialGrid};
+    use crate::transport::Layer;
 
     /// Hostile absorption sets are refused with the set, the layer and the value: negative,
     /// NaN and infinite μa, a wrong length, none at all, and no absorption in a semi-infinite
     /// last layer.
     #[test]
     fn absorption_sets_are_checked() {
-        let stack = |d_mm: f64| Stack {
-            n_above: 1.0,
-            n_below: 1.0,
-            layers: vec![Layer {
-                name: "dermis".into(),
-                d_mm,
-                eta: 1.4,
-                mua_per_mm: 0.1,
-                mus_per_mm: 10.0,
-                g: 0.8,
-            }],
-            junction: None,
-            grid: RadialGrid {
-                dr_mm: 0.01,
-                nr: 10,
-            },
+        let stack = |d_mm: f64| {
+            Stack::in_air(
+                Layer {
+                    name: "dermis".into(),
+                    d_mm,
+                    eta: 1.4,
+                    mua_per_mm: 0.1,
+                    mus_per_mm: 10.0,
+                    g: 0.8,
+                },
+                0.01,
+                10,
+            )
         };
         let finite = stack(1.0);
         assert!(check_sets(&finite, &[vec![0.0], vec![2.5]]).is_ok());

@@ -145,23 +145,18 @@ mod tests {
     /// excepted (MCML's overflow); its A_rz summed holds the absorbed total.
     #[test]
     fn mcml_grids_agree_with_the_engine_tallies() {
-        let stack = Stack {
-            n_above: 1.0,
-            n_below: 1.0,
-            layers: vec![Layer {
+        let stack = Stack::in_air(
+            Layer {
                 name: "slab".into(),
                 d_mm: 1.0,
                 eta: 1.0,
                 mua_per_mm: 0.5,
                 mus_per_mm: 10.0,
                 g: 0.7,
-            }],
-            junction: None,
-            grid: RadialGrid {
-                dr_mm: 0.05,
-                nr: 40,
             },
-        };
+            0.05,
+            40,
+        );
         let run = McmlRun::from_stack(&stack, 20_000);
         let (r, g) = simulate_grid(&run, &McOptions::new(20_000, 3)).unwrap();
         assert_eq!(r.rd_unscattered, 0.0);
