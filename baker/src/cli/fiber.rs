@@ -41,6 +41,21 @@ pub struct FiberBenchArgs {
     /// Incident θi, degrees.
     #[arg(long, allow_hyphen_values = true, default_value_t = -45.0)]
     pub theta_i: f64,
+    /// Instead of throughput: per entry, the time one cross-section takes to bake at the
+    /// thesis's fidelity (2° bins, each direction traced to the noise of 16 M plain photons)
+    /// with the spec's estimators, from a sample of its directions scaled up, next to the
+    /// thesis's Table 10.
+    #[arg(long)]
+    pub thesis: bool,
+    /// With --thesis: stored directions measured per entry (evenly spread).
+    #[arg(long, default_value_t = 6, requires = "thesis")]
+    pub directions: usize,
+    /// With --thesis: override the spec's `bake.split` (draws per event met from outside).
+    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub split: Option<u32>,
+    /// With --thesis: override the spec's `bake.exit_draws` (draws per event met from inside).
+    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub exit_draws: Option<u32>,
     /// Write the table to FILE, atomically, instead of standard output.
     #[arg(short = 'o', long = "out", value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -155,8 +170,91 @@ fn bench_cases(a: &FiberBenchArgs) -> anyhow::Result<Vec<(String, Fiber, f64)>> 
     Ok(cases)
 }
 
+/// `fiber bench --thesis`: every selected entry at the thesis's noise, next to Table 10.
+fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
+    use crate::bake::fiber::thesis;
+    use std::fmt::Write as _;
+    let mut entries = Vec::new();
+    for spec in &a.specs {
+        let s = crate::spec::load_fiber(spec)
+            .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
+        for e in s.fibers {
+            if a.entries.is_empty() || a.entries.contains(&e.name) {
+                entries.push((e, s.bake.clone()));
+            }
+        }
+    }
+    if let Some(missing) = a
+        .entries
+        .iter()
+        .find(|n| !entries.iter().any(|(e, _)| &e.name == *n))
+    {
+        let names: Vec<&str> = entries.iter().map(|(e, _)| e.name.as_str()).collect();
+        return Err(usage(crate::spec::names::unknown_entry(
+            &shown_list(&a.specs),
+            missing,
+            &names,
+        )));
+    }
+    let events = a.progress.events();
+    let bar = a
+        .progress
+        .bar()
+        .then(|| super::progress::bar(entries.len() as u64, "entries"));
+    let mut s = String::new();
+    writeln!(
+        s,
+        "one cross-section at the thesis's noise (2° bins; per direction the noise 16 M plain photons give), {} threads; {} stored directions per entry measured, scaled up",
+        rayon::current_num_threads(),
+        a.directions
+    )?;
+    writeln!(
+        s,
+        "{:<20} {:>6} {:>9} {:>10} {:>11} {:>8} {:>9} {:>11} {:>9} {:>7}",
+        "entry", "stored", "split:exit", "photons", "s/direction", "noise", "thesis", "estimated", "Table 10", "ratio"
+    )?;
+    for (i, (e, st)) in entries.iter().enumerate() {
+        let st = crate::fiber::slices::BakeSettings {
+            split: a.split.unwrap_or(st.split),
+            exit_draws: a.exit_draws.unwrap_or(st.exit_draws),
+            ..st.clone()
+        };
+        let c = thesis::measure(e, &st, a.directions, &crate::cancel::Cancel::NEVER)?;
+        let t10 = c.table_10_minutes;
+        writeln!(
+            s,
+            "{:<20} {:>6} {:>9} {:>10.3e} {:>11.2} {:>7.2}% {:>8.2}% {:>9.1} min {:>5} min {:>7}",
+            c.entry,
+            c.stored_directions,
+            format!("{}:{}", c.split, c.exit_draws),
+            c.photons_per_direction,
+            c.seconds_per_direction,
+            100.0 * c.median_rel_se,
+            100.0 * c.thesis_rel_se,
+            c.estimated_seconds / 60.0,
+            t10.map_or("–".into(), |m| format!("{m}")),
+            t10.map_or("–".into(), |m| format!("{:.2}×", m * 60.0 / c.estimated_seconds)),
+        )?;
+        events.emit(json!({"event": "measured", "index": i, "total": entries.len(), "thesis": c}));
+        if let Some(b) = &bar {
+            b.set_position(i as u64 + 1);
+        }
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    writeln!(
+        s,
+        "ratio: Table 10's time over the estimate (above 1: faster than the thesis). Noise: mean of each slice's median relative standard error (f̂ ≥ 1 % of its maximum); thesis: the same for 16 M plain photons."
+    )?;
+    super::emit_table(&s, a.out.as_deref(), &a.progress)
+}
+
 fn run_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     use std::fmt::Write as _;
+    if a.thesis {
+        return run_thesis_bench(a);
+    }
     let cases = bench_cases(&a)?;
     let total = cases.len() * a.threads.len();
     let bar = a

@@ -19,7 +19,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::sweep::{ChannelKind, Channels};
-use super::tracer::Setup;
+use super::tracer::{Draws, Setup};
 use super::{Fiber, Incident};
 use crate::cancel::{Cancel, Cancelled};
 use crate::math::rng::{batch_rng, uniform};
@@ -31,11 +31,19 @@ use rand_core::Rng;
 pub struct BakeSettings {
     /// Bin width of θ and φ, degrees (thesis: 2°).
     pub res_deg: f64,
-    /// Photons launched per stored incoming direction (rounded up to whole batches).
+    /// Photons launched per stored incoming direction (rounded up to whole batches); with a
+    /// `target`, the first pass.
     pub photons: u64,
+    /// Adaptive allocation: trace each direction on until its noise reaches this.
+    pub target: Option<NoiseTarget>,
+    /// The most photons a direction may use under `target`.
+    pub max_photons: u64,
     pub seed: u64,
-    /// Draws per boundary event of a photon's main path (1: plain tracing).
+    /// Draws per boundary event of a photon's main path met from outside (1: plain tracing).
     pub split: u32,
+    /// Draws per boundary event met from inside the fiber: every exit lobe is sampled this
+    /// many times (1: plain tracing).
+    pub exit_draws: u32,
     /// Photons per batch (one RNG stream, one term of the batch-means error).
     pub batch: u64,
     pub precision: Precision,
@@ -52,7 +60,10 @@ impl Default for BakeSettings {
             res_deg: 2.0,
             photons: 1 << 20,
             seed: 1,
+            target: None,
+            max_photons: 1 << 24,
             split: 1,
+            exit_draws: 1,
             batch: 4096,
             precision: Precision::F16,
             keep_bits: 10,
@@ -75,6 +86,14 @@ impl BakeSettings {
         self.batches_for(self.photons) * self.batch
     }
 
+    /// Draws per boundary event of a photon's main path.
+    pub fn draws(&self) -> Draws {
+        Draws {
+            outside: self.split,
+            inside: self.exit_draws.max(self.split),
+        }
+    }
+
     /// Channels per dye variant: 3 (RGB) or one per wavelength of `lambda_nm` (spectral).
     pub fn channels_per_variant(&self) -> usize {
         match self.channels {
@@ -84,6 +103,22 @@ impl BakeSettings {
     }
 }
 
+/// What adaptive allocation traces a direction to.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NoiseTarget {
+    /// The thesis's noise for this slice: the median over the bins with f̂ ≥ 1 % of the
+    /// slice's maximum of √((1 − p_b)/(N·p_b)), the relative standard error plain sampling
+    /// with N = [`THESIS_PHOTONS`] gives bin b with share p_b of the scattered power (§5.3.2:
+    /// "16 million photons per incoming direction").
+    Thesis,
+    /// A median relative standard error over the same bins.
+    RelSe(f64),
+}
+
+/// Photons per incoming direction in the thesis (§5.3.2, Table 10's bakes).
+pub const THESIS_PHOTONS: f64 = 16e6;
+
 /// Noise of a slice: relative standard error of the sampling density per bin, over bins
 /// whose density exceeds 1 % of the slice's maximum.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -91,6 +126,9 @@ pub struct Noise {
     pub median_rel_se: f64,
     pub p90_rel_se: f64,
     pub bins: usize,
+    /// The thesis's noise over the same bins ([`NoiseTarget::Thesis`]).
+    #[serde(default)]
+    pub thesis_rel_se: f64,
 }
 
 /// One traced incoming bin.
@@ -166,12 +204,22 @@ pub fn trace_slice(
         s,
         seed,
     };
-    let nb = s.batches_for(s.photons);
+    // The first pass; with a target, groups of batches follow until the slice reaches it or
+    // the cap. The check sees the batches merged in order, so where a direction stops does
+    // not depend on the thread count.
+    let first = s.batches_for(s.photons);
+    let cap = match s.target {
+        Some(_) => s.batches_for(s.max_photons).max(first),
+        None => first,
+    };
     let mut sums = SliceSums::new(grid.bins(), channels.len(), channels.per_variant());
     let mut b0 = 0;
-    while b0 < nb {
+    while b0 < cap {
+        if b0 >= first && s.target.is_some_and(|t| sums.reached(grid, t)) {
+            break;
+        }
         cancel.check()?;
-        let b1 = (b0 + GROUP).min(nb);
+        let b1 = (b0 + GROUP).min(if b0 < first { first } else { cap });
         let parts: Vec<BatchScore> = (b0..b1)
             .into_par_iter()
             .map(|b| job.trace_batch(b))
@@ -181,7 +229,7 @@ pub fn trace_slice(
         }
         b0 = b1;
     }
-    Ok(sums.into_result(grid, nb * s.batch, start))
+    Ok(sums.into_result(grid, b0 * s.batch, start))
 }
 
 /// What every batch of one incoming bin shares.
@@ -219,7 +267,7 @@ impl SliceJob<'_> {
             let off = (j as f64 + uniform(rng.next_u64())) / n as f64;
             let st = self
                 .setup
-                .photon(&mut rng, Some(off), s.split, &mut |dir, path, w| {
+                .photon(&mut rng, Some(off), s.draws(), &mut |dir, path, w| {
                     if path != last {
                         row.iter_mut().for_each(|x| *x = 0.0);
                         channels.add_weighted(path, 1.0, &mut row);
@@ -343,30 +391,53 @@ impl SliceSums {
         }
     }
 
-    /// Noise over bins with density ≥ 1 % of the maximum (density per steradian).
+    /// Whether the batches so far reach `target` ([`BakeSettings::target`]).
+    fn reached(&self, grid: &AngularGrid, target: NoiseTarget) -> bool {
+        let n = self.noise(grid, self.used as f64);
+        let want = match target {
+            NoiseTarget::Thesis => n.thesis_rel_se,
+            NoiseTarget::RelSe(x) => x,
+        };
+        n.bins > 0 && n.median_rel_se <= want
+    }
+
+    /// Noise over bins with density ≥ 1 % of the maximum (density per steradian), and the
+    /// thesis's noise over the same bins ([`NoiseTarget::Thesis`]).
     fn noise(&self, grid: &AngularGrid, nbf: f64) -> Noise {
         let (noise_s, noise_s2) = (&self.noise_s, &self.noise_s2);
         let dens: Vec<f64> = (0..self.bins)
             .map(|b| noise_s[b] / nbf / grid.solid_angle(b / grid.n_phi))
             .collect();
         let dmax = dens.iter().copied().fold(0.0, f64::max);
-        let mut rel: Vec<f64> = (0..self.bins)
+        let kept: Vec<usize> = (0..self.bins)
             .filter(|&b| dmax > 0.0 && dens[b] >= 0.01 * dmax)
-            .map(|b| batch_se(noise_s[b], noise_s2[b], nbf) / (noise_s[b] / nbf))
             .collect();
-        rel.sort_by(f64::total_cmp);
-        let q = |p: f64| {
-            if rel.is_empty() {
-                0.0
-            } else {
-                rel[((rel.len() - 1) as f64 * p).round() as usize]
-            }
-        };
+        let mut rel: Vec<f64> = (kept.iter())
+            .map(|&b| batch_se(noise_s[b], noise_s2[b], nbf) / (noise_s[b] / nbf))
+            .collect();
+        let total: f64 = noise_s.iter().sum();
+        let mut thesis: Vec<f64> = (kept.iter())
+            .map(|&b| {
+                let p = noise_s[b] / total;
+                ((1.0 - p) / (THESIS_PHOTONS * p)).sqrt()
+            })
+            .collect();
         Noise {
-            median_rel_se: q(0.5),
-            p90_rel_se: q(0.9),
+            median_rel_se: quantile(&mut rel, 0.5),
+            p90_rel_se: quantile(&mut rel, 0.9),
             bins: rel.len(),
+            thesis_rel_se: quantile(&mut thesis, 0.5),
         }
+    }
+}
+
+/// The `p` quantile of `v` (nearest rank; sorts `v`), 0 when empty.
+fn quantile(v: &mut [f64], p: f64) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        0.0
+    } else {
+        v[((v.len() - 1) as f64 * p).round() as usize]
     }
 }
 

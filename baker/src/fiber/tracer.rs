@@ -138,15 +138,37 @@ impl PhotonStats {
     }
 }
 
-/// Weight below which a split photon plays Russian roulette (survives with probability
-/// w / [`ROULETTE_W`] at weight [`ROULETTE_W`]: unbiased).
-const ROULETTE_W: f64 = 1e-3;
+/// Draws per boundary event of a photon's main path: `outside` for events met from the air
+/// (the reflection lobe R and the entry), `inside` for events met from within the fiber (every
+/// exit lobe TT, TRT, … and the internal reflections). 1 and 1 is plain tracing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Draws {
+    pub outside: u32,
+    pub inside: u32,
+}
+
+impl Draws {
+    /// One draw per event: plain tracing.
+    pub const PLAIN: Draws = Draws {
+        outside: 1,
+        inside: 1,
+    };
+
+    /// Draws for an event met from inside (`true`) or outside the fiber.
+    #[inline]
+    fn at(self, inside: bool) -> u32 {
+        if inside {
+            self.inside.max(1)
+        } else {
+            self.outside.max(1)
+        }
+    }
+}
 
 /// Per-trace constants.
 pub(crate) struct Setup<'a> {
     section: &'a Section,
     inc: Incident,
-    s_max: f64,
     /// W(φc)·cos θc, the normalisation of spread weights.
     w_centre: f64,
     surface: Surface,
@@ -156,6 +178,9 @@ pub(crate) struct Setup<'a> {
     dhat: [f64; 2],
     e_perp: [f64; 2],
     beam: (f64, f64),
+    /// With a spread: a beam (in every φ's own cross axis) that covers the shadow from every
+    /// φ of the bin ([`Setup::new`]).
+    bin_beam: (f64, f64),
     r_start: f64,
     /// Cuticle: (scale length L, ds/dz, s_max, bounding radius of the section).
     cuticle: Option<(f64, f64, f64, f64)>,
@@ -195,16 +220,35 @@ impl<'a> Setup<'a> {
         let s_max = cut.map_or(1.0, |c| c.1);
         let (lo, hi) = fiber.section.extent(e_perp);
         let rb = fiber.section.bound_radius_um();
+        let bin_beam = match inc.spread {
+            None => (lo * s_max, hi * s_max),
+            Some((_, dp)) => {
+                // The extents q·e(φ) are Lipschitz in φ with constant rb (|d(q·e)/dφ| ≤ |q|),
+                // so the extremes over 65 samples ±rb·δ/2 bound them over the whole bin.
+                const K: usize = 64;
+                let delta = dp / K as f64;
+                let (mut l, mut h) = (f64::INFINITY, f64::NEG_INFINITY);
+                for i in 0..=K {
+                    let (sp, cp) = (inc.phi_rad + dp * (i as f64 / K as f64 - 0.5)).sin_cos();
+                    let (a, b) = fiber.section.extent([sp, -cp]);
+                    l = l.min(a);
+                    h = h.max(b);
+                }
+                let m = 0.5 * rb * delta;
+                ((l - m) * s_max, (h + m) * s_max)
+            }
+        };
         Self {
             section: &fiber.section,
             inc,
-            s_max,
+
             w_centre: (hi - lo) * s_max * ct,
             surface: fiber.surface,
             d,
             dhat,
             e_perp,
             beam: (lo * s_max, hi * s_max),
+            bin_beam,
             r_start: rb * s_max * 1.01 + 1.0,
             cuticle: fiber
                 .cuticle
@@ -219,22 +263,25 @@ impl<'a> Setup<'a> {
     }
 
     /// One photon of the beam. `offset` places it across the beam (uniform in [0, 1); drawn
-    /// when `None`); `split` > 1 splits every boundary event of the photon's main path into
-    /// that many draws (see [`TraceOptions::split`]). `emit(dir, path_um, weight)` receives
+    /// when `None`); `draws` splits every boundary event of the photon's main path into that
+    /// many draws ([`Draws`]). `emit(dir, path_um, weight)` receives
     /// every branch that leaves; the weights include the spread weight.
     #[inline]
     pub(crate) fn photon(
         &self,
         rng: &mut BatchRng,
         offset: Option<f64>,
-        split: u32,
+        draws: Draws,
         emit: &mut impl FnMut([f64; 3], f64, f64),
     ) -> PhotonStats {
         let mut u = || uniform(rng.next_u64());
         let (d, dhat, e_perp, beam, g) = match self.inc.spread {
             None => (self.d, self.dhat, self.e_perp, self.beam, 1.0),
             Some((dt, dp)) => {
-                // Uniform in solid angle: uniform in sin θ and φ.
+                // Uniform in solid angle: uniform in sin θ and φ. The beam is the one that
+                // covers the shadow from every φ of the bin ([`Setup::bin_beam`]); the photons
+                // that miss carry no power, so the weight ∝ beam width × cos θ is unbiased for
+                // the power W(φ)·cos θ the fiber intercepts (§5.5, Eq. 17's A(ω)·sin(ω, ω_f)).
                 let (s0, s1) = (
                     (self.inc.theta_rad - 0.5 * dt).sin(),
                     (self.inc.theta_rad + 0.5 * dt).sin(),
@@ -245,8 +292,7 @@ impl<'a> Setup<'a> {
                 let (sp, cp) = phi.sin_cos();
                 let dhat = [-cp, -sp];
                 let e_perp = [sp, -cp];
-                let (lo, hi) = self.section.extent(e_perp);
-                let beam = (lo * self.s_max, hi * self.s_max);
+                let beam = self.bin_beam;
                 let g = (beam.1 - beam.0) * ct / self.w_centre;
                 ([-ct * cp, -ct * sp, -st], dhat, e_perp, beam, g)
             }
@@ -268,7 +314,7 @@ impl<'a> Setup<'a> {
             period: self.cuticle.map_or(0, |c| (z / c.0).floor() as i64),
             w: g,
         };
-        let mut st = self.walk(ray, split.max(1), &mut u, emit);
+        let mut st = self.walk(ray, draws, &mut u, emit);
         st.g = g;
         st
     }
@@ -277,7 +323,7 @@ impl<'a> Setup<'a> {
     fn walk(
         &self,
         mut ray: Ray,
-        split: u32,
+        draws: Draws,
         u: &mut impl FnMut() -> f64,
         emit: &mut impl FnMut([f64; 3], f64, f64),
     ) -> PhotonStats {
@@ -304,9 +350,16 @@ impl<'a> Setup<'a> {
                 st.lost += ray.w;
                 return st;
             }
+            let free = self.leaves_freely(id);
+            let split = draws.at(ray.inside);
             if split <= 1 {
                 let s = self.boundary(ray.dir, n_out, u);
                 st.fallbacks += s.1 as u32;
+                if !s.2 && free {
+                    // Outward through the convex hull: no ray query needed to know it leaves.
+                    emit(s.0, ray.path, ray.w);
+                    return st;
+                }
                 if s.2 != ray.inside {
                     ray.period += step;
                 }
@@ -316,8 +369,11 @@ impl<'a> Setup<'a> {
                 continue;
             }
             // Splitting: `split` draws of the event; the branches that leave are followed
-            // (unsplit) at weight w/split, one of the m that enter continues at weight
-            // w·m/split (picked uniformly: unbiased for the sum of the m).
+            // (unsplit) at weight w/split. The m draws that stay (enter, or reflect inside)
+            // carry w·m/split together: one of them, picked uniformly, goes on at the full
+            // weight w with probability m/split (Russian roulette, unbiased for their sum),
+            // so the main path lives as long as a plain photon's and each event costs
+            // `split` draws, not a tree of them.
             let mut m = 0u32;
             let mut chosen = None;
             let kw = ray.w / split as f64;
@@ -329,6 +385,8 @@ impl<'a> Setup<'a> {
                     if m == 1 || u() * (m as f64) < 1.0 {
                         chosen = Some(s.0);
                     }
+                } else if free {
+                    emit(s.0, ray.path, kw);
                 } else {
                     let child = Ray {
                         dir: s.0,
@@ -338,25 +396,27 @@ impl<'a> Setup<'a> {
                         period: ray.period + if ray.inside { step } else { 0 },
                         ..ray
                     };
-                    st.add(self.walk(child, 1, u, emit));
+                    st.add(self.walk(child, Draws::PLAIN, u, emit));
                 }
             }
             let Some(d) = chosen else { return st };
+            if m < split && u() * split as f64 >= m as f64 {
+                return st;
+            }
             if !ray.inside {
                 ray.period += step;
             }
             ray.dir = d;
             ray.inside = true;
             ray.skip = id;
-            ray.w *= m as f64 / split as f64;
-            if ray.w < ROULETTE_W {
-                if u() * ROULETTE_W < ray.w {
-                    ray.w = ROULETTE_W;
-                } else {
-                    return st;
-                }
-            }
         }
+    }
+
+    /// True when a branch leaving outward through surface `id` can be scored at once: a
+    /// straight fiber ([`Section::leaves_freely`]); cuticle steps can catch a leaving ray.
+    #[inline]
+    fn leaves_freely(&self, id: Option<u32>) -> bool {
+        self.cuticle.is_none() && id.is_some_and(|i| self.section.leaves_freely(i))
     }
 
     /// Moves a ray in a straight extrusion to its next boundary event: returns the outward
@@ -517,7 +577,7 @@ fn trace_batch(
     t.launched = n;
     let grid = o.grid;
     for _ in 0..n {
-        let st = setup.photon(&mut rng, None, 1, &mut |dir, path, w| {
+        let st = setup.photon(&mut rng, None, Draws::PLAIN, &mut |dir, path, w| {
             t.score(grid.bin(dir, inc.phi_rad), path, w)
         });
         t.fallbacks += st.fallbacks as u64;

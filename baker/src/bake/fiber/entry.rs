@@ -511,6 +511,7 @@ fn report(
             median_rel_se: t.noise.0 / n,
             p90_rel_se: t.noise.1 / n,
             bins: 0,
+            ..Noise::default()
         },
         albedo_min,
         albedo_max,

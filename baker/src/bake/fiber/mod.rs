@@ -15,6 +15,7 @@ mod entry;
 mod preview;
 mod setup;
 mod tables;
+pub mod thesis;
 
 use std::time::Instant;
 

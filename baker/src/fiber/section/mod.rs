@@ -118,6 +118,18 @@ impl Section {
         }
     }
 
+    /// True when a ray leaving the material outward through surface `id` (of a hit) can never
+    /// meet the section again: always for a conic (convex), for a polygon when the edge lies
+    /// on its convex hull ([`Polygon::edge_on_hull`]). The tracer scores such exits without
+    /// a ray query.
+    #[inline]
+    pub fn leaves_freely(&self, id: u32) -> bool {
+        match self {
+            Section::Conic { .. } => true,
+            Section::Polygon(p) => p.edge_on_hull(id),
+        }
+    }
+
     /// True inside the material.
     pub fn contains(&self, q: [f64; 2]) -> bool {
         match self {

@@ -30,6 +30,9 @@ pub struct Polygon {
     outer: Vec<[f64; 2]>,
     holes: Vec<Vec<[f64; 2]>>,
     edges: Vec<Edge>,
+    /// Per edge: it lies on the convex hull of the outline (every vertex is on its inner
+    /// side), so a ray leaving outward through it never meets the section again.
+    on_hull: Vec<bool>,
     grid: SegmentGrid,
 }
 
@@ -58,6 +61,27 @@ fn in_loop(p: &[[f64; 2]], q: [f64; 2]) -> bool {
         j = i;
     }
     inside
+}
+
+/// Which edges lie on the convex hull of the outer loop: an outer edge whose line has every
+/// vertex on its inner side, n·v ≤ c (up to 10⁻⁹ of the outline's size). Holes' edges face
+/// the lumen, never the outside. O(E·V), once per section.
+fn hull_edges(outer: &[[f64; 2]], edges: &[Edge]) -> Vec<bool> {
+    let size = outer
+        .iter()
+        .map(|v| v[0].abs().max(v[1].abs()))
+        .fold(0.0, f64::max);
+    let tol = 1e-9 * size.max(1e-300);
+    edges
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            i < outer.len()
+                && outer
+                    .iter()
+                    .all(|v| e.n[0] * v[0] + e.n[1] * v[1] <= e.c + tol)
+        })
+        .collect()
 }
 
 /// Proper intersection of segments p1p2 and p3p4 (shared endpoints do not count).
@@ -148,10 +172,12 @@ impl Polygon {
             .map(|e| (e.a, [e.a[0] + e.ab[0], e.a[1] + e.ab[1]]))
             .collect();
         let grid = SegmentGrid::new(&ends, (edges.len() as f64).sqrt().clamp(1.0, 256.0));
+        let on_hull = hull_edges(&outer, &edges);
         Self {
             outer,
             holes,
             edges,
+            on_hull,
             grid,
         }
     }
@@ -162,6 +188,13 @@ impl Polygon {
 
     pub fn holes(&self) -> &[Vec<[f64; 2]>] {
         &self.holes
+    }
+
+    /// True when edge `id` lies on the outline's convex hull: a ray that leaves the material
+    /// through it (direction · outward normal > 0) is in the open half-plane beyond the edge's
+    /// line, which holds no part of the section, so it never comes back.
+    pub fn edge_on_hull(&self, id: u32) -> bool {
+        self.on_hull.get(id as usize).copied().unwrap_or(false)
     }
 
     pub fn edge_count(&self) -> usize {

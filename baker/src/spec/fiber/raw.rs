@@ -35,8 +35,19 @@ pub struct RawBake {
     pub photons_per_direction: Option<Spanned<f64>>,
     /// Random seed (a whole number).
     pub seed: Option<Spanned<f64>>,
-    /// Draws per boundary event of the main path (a whole number; 1 = plain tracing).
+    /// Draws per boundary event of the main path met from outside (a whole number; 1 = plain
+    /// tracing).
     pub split: Option<Spanned<f64>>,
+    /// Draws per boundary event met from inside the fiber, so every exit lobe is sampled this
+    /// many times per photon (a whole number; 1 = plain tracing).
+    pub exit_draws: Option<Spanned<f64>>,
+    /// Adaptive allocation: each incoming direction traces past `photons_per_direction` until
+    /// the median relative standard error of its table (over bins with f̂ ≥ 1 % of the
+    /// slice's maximum) is at most this: a number in (0, 0.5], or `thesis` for the noise plain
+    /// sampling with the thesis's 16 M photons gives that slice.
+    pub target_rel_se: Option<Spanned<crate::spec::skin::raw::Token>>,
+    /// The most photons one incoming direction may use under `target_rel_se` (a whole number).
+    pub max_photons_per_direction: Option<Spanned<f64>>,
     /// Precision of the stored tables.
     pub precision: Option<Spanned<String>>,
     /// Mantissa bits kept (bit rounding; a whole number up to the precision's: 10 for f16, 23

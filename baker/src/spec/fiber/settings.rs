@@ -4,7 +4,8 @@
 
 use super::raw::{RawBake, RawLambda};
 use super::FiberCx;
-use crate::fiber::slices::BakeSettings;
+use crate::fiber::slices::{BakeSettings, NoiseTarget};
+use crate::spec::skin::raw::Token;
 use crate::fiber::sweep::ChannelKind;
 use crate::spec::check::{loc, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
@@ -19,6 +20,12 @@ pub(in crate::spec) const PHOTONS_PER_DIRECTION: Bounds = Bounds::whole(1.0, 1e1
 pub(in crate::spec) const SEED: Bounds = Bounds::whole(0.0, 9_007_199_254_740_992.0);
 /// `bake.split`: draws per boundary event of the main path.
 pub(in crate::spec) const SPLIT: Bounds = Bounds::whole(1.0, 64.0);
+/// `bake.exit_draws`: draws per boundary event met from inside.
+pub(in crate::spec) const EXIT_DRAWS: Bounds = Bounds::whole(1.0, 256.0);
+/// `bake.target_rel_se` as a number: a relative standard error.
+pub(in crate::spec) const TARGET_REL_SE: Bounds = Bounds::above(0.0, 0.5);
+/// `bake.max_photons_per_direction`: the cap of adaptive allocation.
+pub(in crate::spec) const MAX_PHOTONS_PER_DIRECTION: Bounds = Bounds::whole(1.0, 1e12);
 /// `bake.precision`: of the stored tables.
 pub(in crate::spec) const PRECISIONS: [(&str, Precision); 2] =
     [("f16", Precision::F16), ("f32", Precision::F32)];
@@ -48,6 +55,21 @@ impl FiberCx {
         );
         let seed = self.count("bake.seed", &b.seed, SEED.lo, SEED.hi, d.seed);
         let split = self.count("bake.split", &b.split, SPLIT.lo, SPLIT.hi, d.split as u64) as u32;
+        let exit_draws = self.count(
+            "bake.exit_draws",
+            &b.exit_draws,
+            EXIT_DRAWS.lo,
+            EXIT_DRAWS.hi,
+            d.exit_draws as u64,
+        ) as u32;
+        let target = b.target_rel_se.as_ref().and_then(|t| self.noise_target(t));
+        let max_photons = self.count(
+            "bake.max_photons_per_direction",
+            &b.max_photons_per_direction,
+            MAX_PHOTONS_PER_DIRECTION.lo,
+            MAX_PHOTONS_PER_DIRECTION.hi,
+            d.max_photons,
+        );
         let precision = match &b.precision {
             Some(p) => self
                 .choice("bake.precision", p, &PRECISIONS)
@@ -72,11 +94,35 @@ impl FiberCx {
             photons: photons.max(1),
             seed,
             split,
+            exit_draws,
+            target,
+            max_photons,
             precision,
             keep_bits,
             channels,
             lambda_nm,
             ..d
+        }
+    }
+
+    /// `target_rel_se`: `thesis` or a relative standard error in (0, 1).
+    fn noise_target(&mut self, t: &Spanned<Token>) -> Option<NoiseTarget> {
+        match &t.value {
+            Token::Text(w) if w == "thesis" => Some(NoiseTarget::Thesis),
+            Token::Number(x) => {
+                let v = Spanned::new(*x, t.referenced.clone(), t.defined.clone());
+                self.in_bounds("bake.target_rel_se", &v, TARGET_REL_SE)
+                    .map(NoiseTarget::RelSe)
+            }
+            Token::Text(w) => {
+                self.out_of_range(
+                    loc(t),
+                    "bake.target_rel_se",
+                    w.clone(),
+                    "a relative standard error in (0, 0.5], e.g. 0.03, or `thesis`".into(),
+                );
+                None
+            }
         }
     }
 
