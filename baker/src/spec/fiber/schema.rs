@@ -169,6 +169,7 @@ fn bake(root: &mut Value) {
     bound(prop(b, "photons_per_direction"), PHOTONS_PER_DIRECTION);
     bound(prop(b, "seed"), super::settings::SEED);
     bound(prop(b, "split"), SPLIT);
+    bound(prop(b, "quantise_to_se"), super::settings::QUANTISE_TO_SE);
     names(prop(b, "precision"), &keys(&PRECISIONS));
     names(prop(b, "channels"), &keys(&CHANNELS));
     let most = PRECISIONS.iter().map(|(_, p)| p.mantissa_bits()).max();
