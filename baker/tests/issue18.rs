@@ -55,8 +55,8 @@ fn issue18_rgb_albedo_stays_within_one_and_the_manifest_reports_ranges_noise_and
     let out = bake(tmp.path(), "rgb", &spec(""));
     let m = manifest(&out);
     let e = &m["entries"][0];
-    let mut lo = vec![f64::INFINITY; 9];
-    let mut hi = vec![f64::NEG_INFINITY; 9];
+    let mut lo = [f64::INFINITY; 9];
+    let mut hi = [f64::NEG_INFINITY; 9];
     for t in TABLES {
         let t = Bcsdf::open(out.join(format!("silk/{t}.bcsdf"))).unwrap();
         assert_eq!(t.dir.variants[0], "undyed");
@@ -91,7 +91,7 @@ fn issue18_rgb_albedo_stays_within_one_and_the_manifest_reports_ranges_noise_and
     // The noise metric covers real bins of the 12 × 24 grid.
     let noise = &e["noise"];
     let bins = noise["bins"].as_f64().unwrap();
-    assert!(bins >= 1.0 && bins <= 288.0, "{noise}");
+    assert!((1.0..=288.0).contains(&bins), "{noise}");
     let med = noise["median_rel_se"].as_f64().unwrap();
     assert!(med > 0.0 && med <= noise["p90_rel_se"].as_f64().unwrap());
     // Photons per stored direction: both sections, two whole batches each.
