@@ -256,8 +256,8 @@ fn round_significand(bits: u32, mant: u32, exp: u32, keep: u32) -> u32 {
     (r >> drop) << drop
 }
 
-/// Rounds the mantissa of a non-negative f32 to `keep` bits (round half to even; see
-/// [`round_significand`]).
+/// Rounds the mantissa of a non-negative f32 to `keep` bits (round half to even, after
+/// Klöwer et al. 2021; subnormals keep `keep` bits after their leading one).
 pub fn round_f32(x: f32, keep: u32) -> f32 {
     f32::from_bits(round_significand(x.to_bits(), 23, 8, keep))
 }

@@ -50,7 +50,7 @@ pub struct EntryReport {
     /// Per variant: the smallest and largest albedo Λ per channel over the stored directions
     /// of every table, as stored (after the RGB gamut mapping).
     pub albedo: Vec<AlbedoRange>,
-    /// What the RGB gamut mapping did over the entry's tables ([`super::gamut`]); `None` for
+    /// What the RGB gamut mapping did over the entry's tables (`bake/fiber/gamut.rs`); `None` for
     /// spectral tables, which are never mapped.
     pub rgb_gamut_clip: Option<ClipStats>,
     pub bcsdf_bytes: u64,
