@@ -5,7 +5,8 @@ BCSDF tables"), and checks that
 
 - the HDF5 file (h5py) holds exactly the same decoded values, albedo and projected width;
 - dimension scales are attached (theta_i_deg, variant, channel, theta_o_deg, dphi_deg);
-- every table is normalised: sum(f * solid angle) = 1 per channel (up to f16 rounding);
+- every table is normalised: sum(f * solid angle) = 1 per channel (up to f16 rounding and the
+  rounding to a quarter of each bin's standard error);
 - undyed albedo is 1, and the manifest's SHA-256 match the files.
 
 Usage: python3 validation/check_bcsdf.py --baker target/release/baker
@@ -94,7 +95,10 @@ def main():
                     alb = np.array(meta["albedo"]).reshape(norm.shape)
                     live = alb > 0
                     nerr = np.abs(norm[live] - 1).max()
-                    ok &= nerr < 2e-3
+                    # f16 at 8 kept bits (≤ 2e-3), plus rounding each value within a quarter of
+                    # its bin's standard error (bake.quantise_to_se, default 0.25): zero-mean
+                    # errors whose sum over a slice is ~0.1·sqrt(sum SE^2) ≈ 1e-3 at 8192 photons.
+                    ok &= nerr < 5e-3
                     undyed = [i for i, v in enumerate(meta["variants"]) if v == "undyed"]
                     aerr = np.abs(alb[:, undyed, :] - 1).max() if undyed else 0.0
                     ok &= aerr < 1e-5

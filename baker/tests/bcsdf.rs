@@ -208,7 +208,7 @@ fn f16_tables_stay_within_half_a_percent_of_f32_and_hdf5_holds_the_same_numbers(
     let spec = |p: &str| {
         format!(
             "version: 1
-bake: {{resolution_deg: 5, photons_per_direction: 8192, precision: {p}}}
+bake: {{resolution_deg: 5, photons_per_direction: 8192, precision: {p}, quantise_to_se: 0}}
 fibers:
   - {{name: silk, type: silk, section: {{shape: silk}}, seed: 3, dye: reactive_blue_19, depth_of_shade_percent: 1}}
 "

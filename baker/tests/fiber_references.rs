@@ -255,11 +255,19 @@ fn estimators_agree_with_plain_tracing() {
                 let label = format!("{name} wi{k} split {} exit_draws {}", est.0, est.1);
                 for c in 0..channels.len() {
                     let se = plain.albedo_se[c].hypot(r.albedo_se[c]);
-                    albedo_z.push(((r.albedo[c] - plain.albedo[c]) / se, format!("{label} albedo {c}")));
+                    albedo_z.push((
+                        (r.albedo[c] - plain.albedo[c]) / se,
+                        format!("{label} albedo {c}"),
+                    ));
                 }
                 for c in 0..3 {
                     let z = (r.albedo[c] - 1.0) / r.albedo_se[c].max(1e-15);
-                    assert!(z.abs() < 4.0, "{label}: white furnace Λ = {} ± {} (channel {c})", r.albedo[c], r.albedo_se[c]);
+                    assert!(
+                        z.abs() < 4.0,
+                        "{label}: white furnace Λ = {} ± {} (channel {c})",
+                        r.albedo[c],
+                        r.albedo_se[c]
+                    );
                 }
                 let db = density(&r, 3, grid.bins());
                 let (mut chi2, mut n) = (0.0, 0usize);
@@ -281,7 +289,10 @@ fn estimators_agree_with_plain_tracing() {
     let p_min = 1.0 - (1.0 - alpha).powf(1.0 / sets.len() as f64);
     for (p, chi2, n, label) in &sets {
         eprintln!("{label}: χ² = {chi2:.1} over {n} bins, p = {p:.3}");
-        assert!(*p > p_min, "{label}: χ² = {chi2:.1} over {n} bins, p = {p:.2e} < {p_min:.2e}");
+        assert!(
+            *p > p_min,
+            "{label}: χ² = {chi2:.1} over {n} bins, p = {p:.2e} < {p_min:.2e}"
+        );
     }
     let z_max = sidak_z(albedo_z.len(), alpha);
     let worst = albedo_z

@@ -125,7 +125,8 @@ pub struct Directory {
     pub channels: Vec<String>,
     pub dtype: Precision,
     /// Mantissa bits kept after rounding (≤ the type's): lossy "bit rounding" that zeroes
-    /// bits below the Monte Carlo noise so zstd can compress.
+    /// bits below the Monte Carlo noise so zstd can compress. An upper bound: a writer may
+    /// round a value to fewer bits, within a tolerance of its bin ([`encode_slice`]).
     pub keep_bits: u32,
     /// Per stored ωi, variant, channel: value = stored × scale.
     pub scale: Vec<f32>,
@@ -229,38 +230,73 @@ impl Directory {
     }
 }
 
-/// Rounds the mantissa of a non-negative f32 to `keep` bits (round half to even), the
-/// "bitround" of Klöwer et al., Nature Computational Science 1, 713 (2021).
-pub fn round_f32(x: f32, keep: u32) -> f32 {
-    if keep >= 23 || !x.is_finite() {
-        return x;
+/// Rounds the IEEE-754 bits `bits` of a non-negative value (`mant` explicit mantissa bits,
+/// `exp` exponent bits) to `keep` bits after its leading one, round half to even: the
+/// "bitround" of Klöwer et al., Nature Computational Science 1, 713 (2021). A normal value
+/// keeps `keep` mantissa bits; a subnormal keeps `keep` bits after its own leading one, so
+/// the relative error is at most 2^−(keep+1) for both. Zero, infinities and NaN are
+/// returned as they are.
+fn round_significand(bits: u32, mant: u32, exp: u32, keep: u32) -> u32 {
+    let exponent = (bits >> mant) & ((1 << exp) - 1);
+    if bits == 0 || exponent == (1 << exp) - 1 {
+        return bits;
     }
-    let drop = 23 - keep;
-    let b = x.to_bits();
+    // Bits after the leading one: all `mant` of a normal value, fewer of a subnormal.
+    let after = if exponent == 0 {
+        31 - bits.leading_zeros()
+    } else {
+        mant
+    };
+    let drop = after.saturating_sub(keep);
+    if drop == 0 {
+        return bits;
+    }
     let half = 1u32 << (drop - 1);
-    let r = b + (half - 1) + ((b >> drop) & 1);
-    f32::from_bits((r >> drop) << drop)
+    let r = bits + (half - 1) + ((bits >> drop) & 1);
+    (r >> drop) << drop
+}
+
+/// Rounds the mantissa of a non-negative f32 to `keep` bits (round half to even, after
+/// Klöwer et al. 2021; subnormals keep `keep` bits after their leading one).
+pub fn round_f32(x: f32, keep: u32) -> f32 {
+    f32::from_bits(round_significand(x.to_bits(), 23, 8, keep))
 }
 
 /// f16 counterpart of [`round_f32`] on the raw bits.
 fn round_f16_bits(h: u16, keep: u32) -> u16 {
-    if keep >= 10 {
-        return h;
+    // A rounded finite f16 fits in 16 bits (the largest rounds up to at most infinity).
+    round_significand(u32::from(h), 10, 5, keep) as u16
+}
+
+/// Mantissa bits that keep the rounding error of a value within `rel_tol` of it: the
+/// smallest k with 2^−(k+1) ≤ `rel_tol` (round to nearest to k bits after the leading one
+/// errs by at most half a unit of the k-th bit, 2^(e−k−1) ≤ 2^−(k+1)·x for 2^e ≤ x).
+/// A tolerance of zero or one that is not finite and positive keeps every bit (`u32::MAX`).
+pub fn bits_for_rel_error(rel_tol: f64) -> u32 {
+    if rel_tol.is_nan() || rel_tol <= 0.0 {
+        return u32::MAX;
     }
-    let drop = 10 - keep;
-    let half = 1u16 << (drop - 1);
-    let r = h.saturating_add((half - 1) + ((h >> drop) & 1));
-    (r >> drop) << drop
+    if rel_tol.is_infinite() {
+        return 0;
+    }
+    (-1.0 - rel_tol.log2()).ceil().clamp(0.0, 64.0) as u32
 }
 
 /// Encodes one slice (`v × c × bins` values of f̂ ≥ 0) for `dir`'s type and bit count: returns
 /// the per (variant, channel) scales, the shuffled raw bytes, and the values a reader will
 /// decode (so writers of other formats can store exactly the same numbers).
+///
+/// `rel_tol`, when given, holds one relative tolerance per bin (θo × Δφ, shared by every
+/// variant and channel): each value is rounded further, after `keep_bits`, to the fewest
+/// mantissa bits whose rounding error stays within that fraction of the value
+/// ([`bits_for_rel_error`]); `keep_bits` stays the upper bound. Rounding only zeroes low
+/// mantissa bits, so readers need not know it was done.
 pub fn encode_slice(
     values: &[f64],
     n_vc: usize,
     dtype: Precision,
     keep_bits: u32,
+    rel_tol: Option<&[f64]>,
 ) -> (Vec<f32>, Vec<u8>, Vec<f32>) {
     let bins = values.len() / n_vc.max(1);
     let size = dtype.size();
@@ -268,6 +304,7 @@ pub fn encode_slice(
     let mut raw = vec![0u8; n * size];
     let mut decoded = vec![0f32; n];
     let mut scales = Vec::with_capacity(n_vc);
+    let keep_in = |j: usize| rel_tol.map_or(keep_bits, |t| bits_for_rel_error(t[j]).min(keep_bits));
     for k in 0..n_vc {
         let part = &values[k * bins..(k + 1) * bins];
         let max = part.iter().copied().fold(0.0, f64::max);
@@ -276,16 +313,24 @@ pub fn encode_slice(
         for (j, &x) in part.iter().enumerate() {
             let i = k * bins + j;
             let y = (x / scale as f64) as f32;
+            // `keep_bits` first (the bytes of an unquantised table), then the bin's noise.
+            let keep = keep_in(j);
             match dtype {
                 Precision::F16 => {
-                    let h = round_f16_bits(half::f16::from_f32(y).to_bits(), keep_bits);
+                    let mut h = round_f16_bits(half::f16::from_f32(y).to_bits(), keep_bits);
+                    if keep < keep_bits {
+                        h = round_f16_bits(h, keep);
+                    }
                     let b = h.to_le_bytes();
                     raw[i] = b[0];
                     raw[n + i] = b[1];
                     decoded[i] = half::f16::from_bits(h).to_f32() * scale;
                 }
                 Precision::F32 => {
-                    let r = round_f32(y, keep_bits);
+                    let mut r = round_f32(y, keep_bits);
+                    if keep < keep_bits {
+                        r = round_f32(r, keep);
+                    }
                     for (s, byte) in r.to_le_bytes().into_iter().enumerate() {
                         raw[s * n + i] = byte;
                     }
@@ -337,6 +382,16 @@ impl Writer {
     /// Appends the next stored ωi's slice: `values` are f̂ for every variant and channel.
     /// Returns the decoded values (what a reader will see).
     pub fn push(&mut self, values: &[f64]) -> Result<Vec<f32>, TableError> {
+        self.push_within(values, None)
+    }
+
+    /// [`Writer::push`], each value rounded within `rel_tol[bin]` of itself as well
+    /// ([`encode_slice`]; one tolerance per θo × Δφ bin).
+    pub fn push_within(
+        &mut self,
+        values: &[f64],
+        rel_tol: Option<&[f64]>,
+    ) -> Result<Vec<f32>, TableError> {
         let n_vc = self.dir.variants.len() * self.dir.channels.len();
         if values.len() != n_vc * self.dir.bins() {
             return Err(TableError::Invalid(format!(
@@ -345,7 +400,15 @@ impl Writer {
                 n_vc * self.dir.bins()
             )));
         }
-        let (scales, raw, decoded) = encode_slice(values, n_vc, self.dir.dtype, self.dir.keep_bits);
+        if let Some(t) = rel_tol.filter(|t| t.len() != self.dir.bins()) {
+            return Err(TableError::Invalid(format!(
+                "{} tolerances for a slice of {} bins",
+                t.len(),
+                self.dir.bins()
+            )));
+        }
+        let (scales, raw, decoded) =
+            encode_slice(values, n_vc, self.dir.dtype, self.dir.keep_bits, rel_tol);
         let frame = zstd::bulk::compress(&raw, self.level)
             .map_err(|e| TableError::Compression(e.to_string()))?;
         self.dir.chunks.push(Chunk {
@@ -1066,7 +1129,7 @@ mod tests {
         }
         let values: Vec<f64> = (0..64).map(|i| ((i * 37) % 29) as f64 * 0.013).collect();
         for dtype in [Precision::F16, Precision::F32] {
-            let (scales, raw, decoded) = encode_slice(&values, 2, dtype, 6);
+            let (scales, raw, decoded) = encode_slice(&values, 2, dtype, 6, None);
             for (k, part) in values.chunks(32).enumerate() {
                 assert_eq!(
                     scales[k] as f64,
@@ -1079,8 +1142,116 @@ mod tests {
             }
         }
         // An all-zero part (a fully absorbed channel) stores zeros with scale 1, not 0/0.
-        let (scales, _, decoded) = encode_slice(&[0.0; 8], 1, Precision::F16, 6);
+        let (scales, _, decoded) = encode_slice(&[0.0; 8], 1, Precision::F16, 6, None);
         assert_eq!((scales, decoded), (vec![1.0], vec![0.0; 8]));
+    }
+
+    /// Subnormal f16 values (below 6.1e-5 of a slice's maximum) keep `keep` bits after their
+    /// own leading one, like normal values: relative error ≤ 2^−(keep+1).
+    #[test]
+    fn bitround_of_subnormals_keeps_relative_precision() {
+        for keep in 0..10u32 {
+            for h in 1u16..0x0400 {
+                let x = half::f16::from_bits(h).to_f64();
+                let r = half::f16::from_bits(round_f16_bits(h, keep)).to_f64();
+                assert!(
+                    (r - x).abs() <= 2f64.powi(-(keep as i32 + 1)) * x,
+                    "f16 subnormal {x:e}, {keep} bits: {r:e}"
+                );
+            }
+        }
+        for x in [1e-40f32, 3.3e-42, 7e-45] {
+            let r = round_f32(x, 3);
+            assert!(((r - x) / x).abs() <= 2f32.powi(-4), "{x:e} {r:e}");
+        }
+    }
+
+    /// The bit count for a relative tolerance is the smallest whose half-unit is within it.
+    #[test]
+    fn bits_for_rel_error_is_the_fewest_within_tolerance() {
+        assert_eq!(bits_for_rel_error(0.0), u32::MAX);
+        assert_eq!(bits_for_rel_error(f64::NAN), u32::MAX);
+        assert_eq!(bits_for_rel_error(f64::INFINITY), 0);
+        assert_eq!(bits_for_rel_error(0.5), 0);
+        assert_eq!(bits_for_rel_error(2f64.powi(-5)), 4);
+        for i in 1..2000 {
+            let t = 0.7 * 0.993f64.powi(i);
+            let k = bits_for_rel_error(t);
+            assert!(2f64.powi(-(k as i32 + 1)) <= t, "{t}: {k}");
+            assert!(
+                k == 0 || 2f64.powi(-(k as i32)) > t,
+                "{t}: {k} is not the fewest"
+            );
+        }
+    }
+
+    /// A noisy slice: a smooth density times (1 + relative noise s_b per bin).
+    fn noisy_slice(n_vc: usize, bins: usize) -> (Vec<f64>, Vec<f64>) {
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut u = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let rel_se: Vec<f64> = (0..bins)
+            .map(|b| 0.02 + 0.5 * (b % 7) as f64 / 7.0)
+            .collect();
+        let mut values = vec![0.0; n_vc * bins];
+        for k in 0..n_vc {
+            for b in 0..bins {
+                let smooth = (-((b as f64 - 40.0) / 30.0).powi(2)).exp() * (1.0 + k as f64);
+                // Box-Muller: a normal deviate of standard deviation s_b.
+                let z = (-2.0 * u().max(1e-300).ln()).sqrt() * (2.0 * PI * u()).cos();
+                values[k * bins + b] = (smooth * (1.0 + rel_se[b] * z)).max(0.0);
+            }
+        }
+        values[5] = 0.0; // an empty bin
+        (values, rel_se)
+    }
+
+    /// Rounding to a fraction q of each bin's standard error: every value moves by at most
+    /// q·SE from what `keep_bits` alone stores, bins with no tolerance are untouched, the RMS
+    /// relative error is far below the noise, and the compressed slice shrinks.
+    #[test]
+    fn rounding_to_the_noise_stays_within_its_bound_and_compresses() {
+        let (n_vc, bins) = (6, 180);
+        let (values, rel_se) = noisy_slice(n_vc, bins);
+        let q = 0.25;
+        let mut tol: Vec<f64> = rel_se.iter().map(|s| q * s).collect();
+        tol[11] = 0.0; // no standard error: full precision
+        for dtype in [Precision::F16, Precision::F32] {
+            for keep in [dtype.mantissa_bits(), 7] {
+                let (s0, raw0, plain) = encode_slice(&values, n_vc, dtype, keep, None);
+                let (s1, raw1, quant) = encode_slice(&values, n_vc, dtype, keep, Some(&tol));
+                assert_eq!(s0, s1);
+                assert_eq!(decode_values(&raw1, dtype, &s1, bins), quant);
+                let (mut e2, mut noise2, mut n) = (0.0, 0.0, 0.0);
+                for (i, (&p, &d)) in plain.iter().zip(&quant).enumerate() {
+                    let b = i % bins;
+                    let (p, d) = (p as f64, d as f64);
+                    // f32 products with the scale: a few ulps of slack.
+                    let bound = tol[b] * p + 4.0 * f64::from(f32::EPSILON) * p;
+                    assert!(
+                        (d - p).abs() <= bound,
+                        "{dtype:?} keep {keep} value {i}: {p} → {d}"
+                    );
+                    if tol[b] == 0.0 {
+                        assert_eq!(d, p, "bin {b} has no tolerance");
+                    }
+                    if p > 0.0 {
+                        e2 += ((d - p) / p).powi(2);
+                        noise2 += rel_se[b].powi(2);
+                        n += 1.0;
+                    }
+                }
+                let (rms, noise) = ((e2 / n).sqrt(), (noise2 / n).sqrt());
+                assert!(rms < 0.25 * noise, "{dtype:?}: RMS {rms} vs noise {noise}");
+                let z = |r: &[u8]| zstd::bulk::compress(r, 9).unwrap().len();
+                let (a, b) = (z(&raw0), z(&raw1));
+                assert!(b < a, "{dtype:?} keep {keep}: {b} bytes rounded, {a} not");
+            }
+        }
     }
 
     #[test]

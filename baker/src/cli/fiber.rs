@@ -211,7 +211,16 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     writeln!(
         s,
         "{:<20} {:>6} {:>9} {:>10} {:>11} {:>8} {:>9} {:>11} {:>9} {:>7}",
-        "entry", "stored", "split:exit", "photons", "s/direction", "noise", "thesis", "estimated", "Table 10", "ratio"
+        "entry",
+        "stored",
+        "split:exit",
+        "photons",
+        "s/direction",
+        "noise",
+        "thesis",
+        "estimated",
+        "Table 10",
+        "ratio"
     )?;
     for (i, (e, st)) in entries.iter().enumerate() {
         let st = crate::fiber::slices::BakeSettings {
@@ -233,7 +242,10 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
             100.0 * c.thesis_rel_se,
             c.estimated_seconds / 60.0,
             t10.map_or("–".into(), |m| format!("{m}")),
-            t10.map_or("–".into(), |m| format!("{:.2}×", m * 60.0 / c.estimated_seconds)),
+            t10.map_or("–".into(), |m| format!(
+                "{:.2}×",
+                m * 60.0 / c.estimated_seconds
+            )),
         )?;
         events.emit(json!({"event": "measured", "index": i, "total": entries.len(), "thesis": c}));
         if let Some(b) = &bar {

@@ -2,17 +2,31 @@
 //! by a beam averaged over that bin, binned over the outgoing sphere for every channel of a
 //! dye sweep at once ([`super::sweep`]).
 //!
-//! Variance reduction (the thesis shoots 16 M plain photons per direction):
+//! Variance reduction (the thesis shoots 16 M plain photons per direction), each switchable
+//! in the spec's `bake:` block and each tested against plain tracing
+//! (`baker/tests/fiber_references.rs`, `estimators_agree_with_plain_tracing`):
 //! - **Stratified entry offsets**: photon j of a batch of n enters at (j + u)/n across the
-//!   beam, so the beam is covered evenly.
-//! - **Splitting at interfaces**: each boundary event of a photon's main path is drawn
-//!   `split` times; every draw that leaves is followed at weight w/split, one of the draws
-//!   that enter goes on at the weight of all of them ([`super::tracer`]). The reflection
-//!   lobe, the exit lobes (TT, TRT, …) and the roughness of every exit get `split` samples
-//!   where plain tracing gets one.
+//!   beam, so the beam is covered evenly. The beam is the one that covers the fiber's shadow
+//!   from every direction of the incoming bin; photons that miss carry no power.
+//! - **Splitting at interfaces** (`split` for events met from outside: the R lobe and the
+//!   entry; `exit_draws` for events met from inside: every exit lobe TT, TRT, … and the
+//!   internal reflections): the event is drawn k times; every draw that leaves is followed
+//!   at weight w/k, and the m draws that stay carry w·m/k together, which one of them
+//!   (picked uniformly) carries on at the full weight w with probability m/k (Russian
+//!   roulette). Unbiased: the expected weight of what leaves and of what goes on is plain
+//!   tracing's, draw by draw. The lobe of a rough exit (6–17° Beckmann, many 2° bins) then
+//!   gets k samples per photon where plain tracing gets one, while the path lives as long as
+//!   a plain photon's. Exits through an edge on the convex hull are scored without a ray
+//!   query ([`super::Section::leaves_freely`]).
+//! - **Adaptive allocation** (`target_rel_se`, `max_photons_per_direction`): after the first
+//!   `photons_per_direction`, groups of batches follow until the slice's median relative
+//!   error reaches the target ([`NoiseTarget`]) or the cap. The check sees the batches merged
+//!   in order, so the stopping point does not depend on the thread count; it uses the median
+//!   over thousands of bins, a statistic nearly independent of any one bin's value, so the
+//!   bias of a data-dependent stop is far below the noise.
 //!
 //! Standard errors come from the spread of independent batches (batch means), which is
-//! valid for split and stratified estimators alike.
+//! valid for split, stratified and adaptively stopped estimators alike.
 
 use std::time::Instant;
 
@@ -114,6 +128,17 @@ pub enum NoiseTarget {
     Thesis,
     /// A median relative standard error over the same bins.
     RelSe(f64),
+}
+
+impl NoiseTarget {
+    /// Whether a slice with noise `n` reaches the target.
+    pub fn met_by(self, n: &Noise) -> bool {
+        let want = match self {
+            NoiseTarget::Thesis => n.thesis_rel_se,
+            NoiseTarget::RelSe(x) => x,
+        };
+        n.bins > 0 && n.median_rel_se <= want
+    }
 }
 
 /// Photons per incoming direction in the thesis (§5.3.2, Table 10's bakes).
@@ -393,12 +418,7 @@ impl SliceSums {
 
     /// Whether the batches so far reach `target` ([`BakeSettings::target`]).
     fn reached(&self, grid: &AngularGrid, target: NoiseTarget) -> bool {
-        let n = self.noise(grid, self.used as f64);
-        let want = match target {
-            NoiseTarget::Thesis => n.thesis_rel_se,
-            NoiseTarget::RelSe(x) => x,
-        };
-        n.bins > 0 && n.median_rel_se <= want
+        target.met_by(&self.noise(grid, self.used as f64))
     }
 
     /// Noise over bins with density ≥ 1 % of the maximum (density per steradian), and the

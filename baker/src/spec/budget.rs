@@ -197,7 +197,12 @@ fn skin_cost(s: &SkinSpec, o: &Overrides) -> Cost {
 
 fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
     let st = &s.bake;
-    let per_direction = st.batches_for(o.photons.unwrap_or(st.photons)) * st.batch;
+    let first = st.batches_for(o.photons.unwrap_or(st.photons)) * st.batch;
+    // Adaptive allocation may trace a direction up to its cap: the budget counts the cap.
+    let per_direction = match st.target {
+        Some(_) => first.max(st.batches_for(st.max_photons) * st.batch),
+        None => first,
+    };
     let grid_bins = ((180.0 / st.res_deg).round() * (360.0 / st.res_deg).round()).max(1.0);
     let t = o.threads.max(1) as f64;
     let value_bytes = match st.precision {

@@ -8,11 +8,13 @@ use anyhow::Context;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::gamut::{ClipStats, GamutClip};
 use super::setup::{entry_setup, unit_id_key, EntrySetup};
 use super::tables::{file_attrs, Layout, TableOut};
 use crate::bake::destination::Destination;
 use crate::bake::job::Job;
-use crate::fiber::slices::{self as bake, incident_of_bin, unit_len, BakeSettings, Noise};
+use crate::fiber::slices::{self as bake, incident_of_bin, unit_len, BakeSettings, NoiseTarget};
+use crate::fiber::sweep::ChannelKind;
 use crate::fiber::Fiber;
 use crate::math::rng::coordinate_seed;
 use crate::output::{atomic, hdf5 as h5out};
@@ -29,8 +31,14 @@ pub struct EntryReport {
     pub symmetry: String,
     pub stored_directions: usize,
     pub full_directions: usize,
+    /// Photons asked for per stored direction and section (`bake.photons_per_direction`,
+    /// whole batches); what each direction used is in `photons`.
     pub photons_per_direction: u64,
     pub split: u32,
+    pub exit_draws: u32,
+    /// Adaptive allocation's target (`null`: a fixed count per direction) and cap.
+    pub target_rel_se: Option<NoiseTarget>,
+    pub max_photons_per_direction: u64,
     pub variants: Vec<String>,
     pub channels: Vec<String>,
     /// Wall-clock figures: in `timing.json`, not the (reproducible) manifest.
@@ -38,17 +46,70 @@ pub struct EntryReport {
     pub seconds: f64,
     #[serde(skip)]
     pub photons_per_s: f64,
-    /// Photons launched for this entry's tables (units taken from the cache included).
-    #[serde(skip)]
-    pub photons: u64,
-    /// Mean over stored directions of each slice's median / 90th-percentile per-bin relative
-    /// standard error (section 0).
-    pub noise: Noise,
-    /// Largest |Λ − 1|/SE over directions for undyed variants (0 when none is undyed).
-    pub albedo_min: f64,
-    pub albedo_max: f64,
+    /// Photons launched per stored direction (all its sections; units taken from the cache
+    /// included).
+    pub photons: PhotonsUsed,
+    /// Per-bin relative standard error of the sampling density (section 0).
+    pub noise: NoiseReport,
+    /// Per variant: the smallest and largest albedo Λ per channel over the stored directions
+    /// of every table, as stored (after the RGB gamut mapping).
+    pub albedo: Vec<AlbedoRange>,
+    /// What the RGB gamut mapping did over the entry's tables (`bake/fiber/gamut.rs`); `None` for
+    /// spectral tables, which are never mapped.
+    pub rgb_gamut_clip: Option<ClipStats>,
     pub bcsdf_bytes: u64,
     pub hdf5_bytes: u64,
+}
+
+/// Photons launched per stored direction (summed over its sections).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct PhotonsUsed {
+    pub min: u64,
+    /// The lower median (element ⌊(n − 1)/2⌋ in increasing order).
+    pub median: u64,
+    pub max: u64,
+    /// Over every stored direction.
+    pub total: u64,
+}
+
+impl PhotonsUsed {
+    fn of(per_direction: &[u64]) -> PhotonsUsed {
+        let mut v = per_direction.to_vec();
+        v.sort_unstable();
+        PhotonsUsed {
+            min: v.first().copied().unwrap_or(0),
+            median: v.get(v.len().saturating_sub(1) / 2).copied().unwrap_or(0),
+            max: v.last().copied().unwrap_or(0),
+            total: v.iter().sum(),
+        }
+    }
+}
+
+/// The noise metric of an entry: per stored direction, section 0's relative standard error
+/// of the sampling density over the bins whose density is ≥ 1 % of the slice's maximum
+/// ([`crate::fiber::slices::Noise`]), averaged over the stored directions.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct NoiseReport {
+    /// Mean over stored directions of each slice's median per-bin relative error.
+    pub median_rel_se: f64,
+    /// Mean over stored directions of each slice's 90th percentile.
+    pub p90_rel_se: f64,
+    /// Mean number of bins per slice the two statistics are taken over.
+    pub bins: f64,
+    /// Mean over stored directions of the thesis's noise for each slice (section 0): what
+    /// plain sampling with 16 M photons would give ([`crate::fiber::slices::NoiseTarget`]).
+    pub thesis_rel_se: f64,
+    /// Stored directions whose section 0 reached the spec's `target_rel_se` (all of them
+    /// without a target).
+    pub directions_at_target: usize,
+}
+
+/// The albedo range of one variant, per channel.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AlbedoRange {
+    pub variant: String,
+    pub min: Vec<f64>,
+    pub max: Vec<f64>,
 }
 
 /// An entry's report and its files (path relative to the spec's output, description).
@@ -69,18 +130,30 @@ pub struct EntryBake<'a> {
 
 /// What the direction loop accumulates for the report.
 struct Tallies {
-    noise: (f64, f64, usize),
-    photons: u64,
-    /// Smallest and largest albedo of undyed variants.
-    albedo: (f64, f64),
+    /// Σ over stored directions of section 0's median and p90 relative error and bins.
+    noise: (f64, f64, f64),
+    /// Σ over directions of section 0's thesis noise, and the directions at their target.
+    thesis_noise: f64,
+    at_target: usize,
+    /// Photons per stored direction, in stored order.
+    photons: Vec<u64>,
+    /// Per variant × channel: the smallest and largest stored albedo over every table.
+    albedo: Vec<(f64, f64)>,
+    /// The RGB gamut mapping per table, and over the entry (a direction counts once).
+    clip: Vec<ClipStats>,
+    clip_entry: ClipStats,
 }
 
-impl Default for Tallies {
-    fn default() -> Tallies {
+impl Tallies {
+    fn new(channels: usize, tables: usize) -> Tallies {
         Tallies {
-            noise: (0.0, 0.0, 0),
-            photons: 0,
-            albedo: (f64::INFINITY, f64::NEG_INFINITY),
+            noise: (0.0, 0.0, 0.0),
+            thesis_noise: 0.0,
+            at_target: 0,
+            photons: Vec::new(),
+            albedo: vec![(f64::INFINITY, f64::NEG_INFINITY); channels],
+            clip: vec![ClipStats::default(); tables],
+            clip_entry: ClipStats::default(),
         }
     }
 }
@@ -188,7 +261,7 @@ pub fn bake_entry(
     };
     let geo = Geometry::of(&eb);
     let h5_path = d.staged.path(&format!("{0}/{0}.h5", e.name))?;
-    let mut tallies = Tallies::default();
+    let mut tallies = Tallies::new(eb.setup.channels.len(), geo.table_names.len());
     let mut tables = Vec::new();
     atomic::write_with(&h5_path, |tmp| -> anyhow::Result<()> {
         tables = write_tables(&eb, &geo, tmp, &mut tallies)?;
@@ -220,14 +293,27 @@ pub fn bake_entry(
 fn announce(eb: &EntryBake) {
     let s = &eb.setup;
     eb.job.runner.events.say(format!(
-        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons (split {}), {} variant(s) × {} channel(s)",
+        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons{} (split {}, exit draws {}), {} variant(s) × {} channel(s)",
         eb.e.name,
         s.fibers.len(),
         s.sym.describe(),
         s.stored.len(),
         s.grid.bins(),
         eb.st.photons_per_direction(),
+        match eb.st.target {
+            None => String::new(),
+            Some(NoiseTarget::Thesis) => format!(
+                " and more to the thesis's noise (at most {})",
+                eb.st.max_photons
+            ),
+            Some(NoiseTarget::RelSe(x)) => format!(
+                " and more to {:.2} % relative error (at most {})",
+                100.0 * x,
+                eb.st.max_photons
+            ),
+        },
         eb.st.split,
+        eb.st.exit_draws,
         s.variants.len(),
         s.channels.per_variant()
     ));
@@ -311,6 +397,7 @@ fn write_tables(
         variants: &s.channels.variants,
         channels: &s.channels.channel_names,
         phi_centres: &geo.phi_centres,
+        quantise_to_se: eb.spec.storage.quantise_to_se,
     };
     let mut outs = Vec::new();
     for (t, name) in geo.table_names.iter().enumerate() {
@@ -324,9 +411,11 @@ fn write_tables(
         )?);
     }
     trace_into(eb, &mut outs, tallies)?;
+    let rgb = st.channels == ChannelKind::Rgb;
     let tables = outs
         .into_iter()
-        .map(|o| o.finish(&layout))
+        .zip(&tallies.clip)
+        .map(|(o, c)| o.finish(&layout, rgb.then_some(c)))
         .collect::<anyhow::Result<Vec<_>>>()?;
     file.close()?;
     Ok(tables)
@@ -342,8 +431,10 @@ fn table_metadata(eb: &EntryBake, name: &str, t: usize) -> serde_json::Value {
         "beta_deg": e.beta_deg, "cuticle": e.cuticle, "source": e.source,
         "section_variant": (t < ns).then_some(t),
         "symmetry": eb.setup.sym, "photons_per_direction": st.photons_per_direction(),
-        "split": st.split, "seed": st.seed, "lambda_nm": st.lambda_nm,
-        "channels": st.channels,
+        "split": st.split, "exit_draws": st.exit_draws,
+        "target_rel_se": st.target, "max_photons_per_direction": st.max_photons,
+        "seed": st.seed, "lambda_nm": st.lambda_nm,
+        "channels": st.channels, "quantise_to_se": eb.spec.storage.quantise_to_se,
         "spec_sha256": eb.spec.sha256, "baker_version": env!("CARGO_PKG_VERSION"),
         "created_utc": crate::output::manifest::created_utc(),
     })
@@ -368,7 +459,13 @@ fn trace_units(
 ) -> anyhow::Result<()> {
     let (s, runner) = (&eb.setup, eb.job.runner);
     let n_wi = s.stored.len();
-    let nc = s.channels.per_variant();
+    let bins = s.grid.bins();
+    let clip = (eb.st.channels == ChannelKind::Rgb).then(|| {
+        GamutClip::new(
+            &eb.st.lambda_nm,
+            eb.e.variants.iter().map(Option::is_none).collect(),
+        )
+    });
     let all: Vec<usize> = (0..n_wi).collect();
     for (u, chunk) in all.chunks(unit_len(n_wi)).enumerate() {
         let results = eb
@@ -378,20 +475,35 @@ fn trace_units(
             // Encoding and writing a direction of a wide sweep takes a while: a signal
             // stops here too (the HDF5 file being written is dropped).
             runner.cancel.check()?;
-            tallies.photons += res.iter().map(|r| r.launched).sum::<u64>();
+            tallies
+                .photons
+                .push(res.iter().map(|r| r.launched).sum::<u64>());
             tallies.noise.0 += res[0].noise.median_rel_se;
             tallies.noise.1 += res[0].noise.p90_rel_se;
-            tallies.noise.2 += 1;
-            let all = with_average(eb, s.stored[i], res);
-            for (o, r) in outs.iter_mut().zip(&all) {
+            tallies.noise.2 += res[0].noise.bins as f64;
+            tallies.thesis_noise += res[0].noise.thesis_rel_se;
+            tallies.at_target += usize::from(eb.st.target.is_none_or(|t| t.met_by(&res[0].noise)));
+            let mut all = with_average(eb, s.stored[i], res);
+            let mut factors = Vec::new();
+            for (t, (o, r)) in outs.iter_mut().zip(&mut all).enumerate() {
+                if let Some(clip) = &clip {
+                    let f = clip.apply(r, bins).with_context(|| {
+                        format!(
+                            "{}, table {}, stored incoming direction {i} (bin {})",
+                            eb.e.name, o.name, s.stored[i]
+                        )
+                    })?;
+                    tallies.clip[t].add(&f);
+                    factors.extend(f);
+                }
                 o.push(i, r, &s.grid)?;
-                for (v, &al) in r.albedo.iter().enumerate() {
-                    if eb.e.variants[v / nc].is_none() {
-                        tallies.albedo.0 = tallies.albedo.0.min(al);
-                        tallies.albedo.1 = tallies.albedo.1.max(al);
-                    }
+                // As stored (f32).
+                for (range, &a) in tallies.albedo.iter_mut().zip(&r.albedo) {
+                    let a = f64::from(a as f32);
+                    *range = (range.0.min(a), range.1.max(a));
                 }
             }
+            tallies.clip_entry.add(&factors);
         }
     }
     Ok(())
@@ -423,6 +535,16 @@ fn with_average(eb: &EntryBake, b: usize, res: Vec<bake::SliceResult>) -> Vec<ba
                 .map(|(r, w)| w * r.fraction[k])
                 .sum::<f64>()
                 / wt;
+        }
+        // Variant 0's per-bin error, for rounding the average to its own noise (the
+        // sections are independent traces).
+        for (b, se) in avg.density_se.iter_mut().enumerate() {
+            *se = all
+                .iter()
+                .zip(&w)
+                .map(|(r, w)| (w / wt * r.density_se.get(b).copied().unwrap_or(0.0)).powi(2))
+                .sum::<f64>()
+                .sqrt();
         }
         for c in 0..avg.albedo.len() {
             avg.albedo[c] = avg.fraction[c * bins..(c + 1) * bins].iter().sum();
@@ -490,9 +612,20 @@ fn report(
     hdf5_bytes: u64,
 ) -> EntryReport {
     let (e, s, st) = (eb.e, &eb.setup, eb.st);
-    let n = t.noise.2.max(1) as f64;
-    let finite_or_0 = |x: f64| if x.is_finite() { x } else { 0.0 };
-    let (albedo_min, albedo_max) = (finite_or_0(t.albedo.0), finite_or_0(t.albedo.1));
+    let n = t.photons.len().max(1) as f64;
+    let nc = s.channels.per_variant();
+    let albedo = s
+        .channels
+        .variants
+        .iter()
+        .zip(t.albedo.chunks(nc))
+        .map(|(v, r)| AlbedoRange {
+            variant: v.clone(),
+            min: r.iter().map(|x| x.0).collect(),
+            max: r.iter().map(|x| x.1).collect(),
+        })
+        .collect();
+    let photons = PhotonsUsed::of(&t.photons);
     EntryReport {
         name: e.name.clone(),
         fiber_type: e.fiber_type.name,
@@ -502,19 +635,23 @@ fn report(
         full_directions: s.grid.bins(),
         photons_per_direction: st.photons_per_direction(),
         split: st.split,
+        exit_draws: st.exit_draws,
+        target_rel_se: st.target,
+        max_photons_per_direction: st.max_photons,
         variants: s.channels.variants.clone(),
         channels: s.channels.channel_names.clone(),
         seconds,
-        photons_per_s: t.photons as f64 / seconds,
-        photons: t.photons,
-        noise: Noise {
+        photons_per_s: photons.total as f64 / seconds,
+        photons,
+        noise: NoiseReport {
             median_rel_se: t.noise.0 / n,
             p90_rel_se: t.noise.1 / n,
-            bins: 0,
-            ..Noise::default()
+            bins: t.noise.2 / n,
+            thesis_rel_se: t.thesis_noise / n,
+            directions_at_target: t.at_target,
         },
-        albedo_min,
-        albedo_max,
+        albedo,
+        rgb_gamut_clip: (st.channels == ChannelKind::Rgb).then(|| t.clip_entry.clone()),
         bcsdf_bytes,
         hdf5_bytes,
     }

@@ -12,6 +12,7 @@
 //!   `timing.json`.
 
 mod entry;
+mod gamut;
 mod preview;
 mod setup;
 mod tables;
@@ -61,7 +62,7 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
     for e in selected() {
         if let Some((r, f)) = entry::bake_entry(job, spec, e, &settings, &mut unit_index)? {
             timing.push(serde_json::json!({"entry": r.name, "seconds": r.seconds,
-                "photons": r.photons, "photons_per_s": r.photons_per_s}));
+                "photons": r.photons.total, "photons_per_s": r.photons_per_s}));
             reports.push(r);
             files.extend(f);
         }
@@ -74,7 +75,7 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
         kind: Kind::Fiber,
         spec_file: spec.file.clone(),
         spec_sha256: spec.sha256.clone(),
-        settings: serde_json::to_value(&settings)?,
+        settings: settings_json(&settings, &spec.storage)?,
         entries: serde_json::to_value(&reports)?,
         files: files
             .iter()
@@ -86,7 +87,7 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
         seconds: t0.elapsed().as_secs_f64(),
         phases: vec![],
         threads: a.thread_count(),
-        photons: reports.iter().map(|r| r.photons).sum(),
+        photons: reports.iter().map(|r| r.photons.total).sum(),
         entries: timing,
     };
     manifest::write(job, m, t)?;
@@ -98,6 +99,20 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
         t0.elapsed().as_secs_f64()
     ));
     Ok(())
+}
+
+/// The manifest's `settings`: the bake's and the tables' storage settings in one object.
+fn settings_json(
+    st: &BakeSettings,
+    storage: &crate::spec::fiber::TableStorage,
+) -> anyhow::Result<serde_json::Value> {
+    let mut v = serde_json::to_value(st)?;
+    if let (Some(m), serde_json::Value::Object(s)) =
+        (v.as_object_mut(), serde_json::to_value(storage)?)
+    {
+        m.extend(s);
+    }
+    Ok(v)
 }
 
 /// `baker plan`'s calibration of entry `e`: seconds per photon on one thread, from a few

@@ -5,6 +5,7 @@
 use hdf5_metno as h5;
 use ndarray::{s, ArrayView3, ArrayView4, ArrayView5};
 
+use super::gamut::ClipStats;
 use crate::fiber::slices::{BakeSettings, SliceResult};
 use crate::fiber::AngularGrid;
 use crate::output::hdf5 as h5out;
@@ -23,6 +24,8 @@ pub struct Layout<'a> {
     pub channels: &'a [String],
     /// Bin centres of φ (and Δφ), degrees.
     pub phi_centres: &'a [f64],
+    /// Rounding error allowed per value, as a fraction of its bin's standard error (0: off).
+    pub quantise_to_se: f64,
 }
 
 impl Layout<'_> {
@@ -41,6 +44,7 @@ pub struct TableOut {
     albedo: Vec<f32>,
     albedo_se: Vec<f32>,
     group: h5::Group,
+    quantise_to_se: f64,
 }
 
 /// Writes the file-level attributes of an entry's HDF5 file.
@@ -117,6 +121,7 @@ impl TableOut {
             albedo: Vec::new(),
             albedo_se: Vec::new(),
             group: g,
+            quantise_to_se: l.quantise_to_se,
         })
     }
 
@@ -128,7 +133,10 @@ impl TableOut {
             self.writer.dir.variants.len(),
             self.writer.dir.channels.len(),
         );
-        let decoded = self.writer.push(&r.normalised(grid))?;
+        let tol = noise_tolerance(r, nc, grid.bins(), self.quantise_to_se);
+        let decoded = self
+            .writer
+            .push_within(&r.normalised(grid), tol.as_deref())?;
         self.albedo.extend(r.albedo.iter().map(|&x| x as f32));
         self.albedo_se.extend(r.albedo_se.iter().map(|&x| x as f32));
         let view = ArrayView5::from_shape((1, nv, nc, nt, np), &decoded)?;
@@ -147,10 +155,23 @@ impl TableOut {
         Ok(())
     }
 
-    /// The axes, albedo, area and map datasets with their scales; then the streaming file's
-    /// bytes.
-    pub fn finish(mut self, l: &Layout) -> anyhow::Result<(String, Vec<u8>)> {
+    /// The axes, albedo, area and map datasets with their scales, and what the RGB gamut
+    /// mapping did to the table (`clip`, `None` for spectral tables: in the directory's
+    /// metadata and the group's attributes); then the streaming file's bytes.
+    pub fn finish(
+        mut self,
+        l: &Layout,
+        clip: Option<&ClipStats>,
+    ) -> anyhow::Result<(String, Vec<u8>)> {
         let grid = l.grid;
+        let clip = serde_json::to_value(clip)?;
+        h5out::text_attr(&self.group, "rgb_gamut_clip", &clip.to_string())?;
+        h5out::text_attr(
+            &self.group,
+            "quantise_to_se",
+            &self.quantise_to_se.to_string(),
+        )?;
+        self.writer.dir.metadata["rgb_gamut_clip"] = clip;
         let (n_wi, nv, nc) = (l.n_wi(), l.variants.len(), l.channels.len());
         let g = &self.group;
         let albedo = h5out::array(g, "albedo", &[n_wi, nv, nc], &self.albedo)?;
@@ -227,5 +248,70 @@ impl TableOut {
         self.writer.dir.albedo_se = std::mem::take(&mut self.albedo_se);
         let bytes = self.writer.finish()?;
         Ok((self.name, bytes))
+    }
+}
+
+/// The relative rounding tolerance of every bin of `r`'s slice (θo × Δφ): `q` times the
+/// bin's relative standard error, that of variant 0's density (its fraction averaged over
+/// its `nc` channels, [`SliceResult::density_se`]), shared by every variant and channel of
+/// the bin. Zero (full precision) where the density or its error is zero; `None` when `q`
+/// is zero or the slice carries no per-bin errors.
+pub fn noise_tolerance(r: &SliceResult, nc: usize, bins: usize, q: f64) -> Option<Vec<f64>> {
+    if q <= 0.0 || r.density_se.len() != bins {
+        return None;
+    }
+    Some(
+        (0..bins)
+            .map(|b| {
+                let d = (0..nc).map(|c| r.fraction[c * bins + b]).sum::<f64>() / nc as f64;
+                let se = r.density_se[b];
+                if d > 0.0 && se > 0.0 {
+                    q * se / d
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fiber::slices::Noise;
+
+    /// q × SE / density of variant 0 (mean of its channels), per bin; exact zeros where
+    /// there is no density or no error; nothing when off or without per-bin errors.
+    #[test]
+    fn tolerance_is_a_fraction_of_variant_0s_relative_error() {
+        let bins = 4;
+        let r = SliceResult {
+            // Variant 0: channels 0, 1; variant 1: channels 2, 3.
+            fraction: vec![
+                0.2, 0.0, 0.4, 0.1, //
+                0.6, 0.0, 0.4, 0.3, //
+                9.0, 9.0, 9.0, 9.0, //
+                9.0, 9.0, 9.0, 9.0,
+            ],
+            albedo: vec![0.7, 1.3, 36.0, 36.0],
+            albedo_se: vec![0.0; 4],
+            density_se: vec![0.04, 0.01, 0.0, 0.02],
+            noise: Noise::default(),
+            launched: 1,
+            intercepted: 1,
+            lost_weight: 0.0,
+            seconds: 0.0,
+        };
+        let t = noise_tolerance(&r, 2, bins, 0.25).unwrap();
+        let want = [0.25 * 0.04 / 0.4, 0.0, 0.0, 0.25 * 0.02 / 0.2];
+        for (a, b) in t.iter().zip(want) {
+            assert!((a - b).abs() < 1e-15, "{t:?}");
+        }
+        assert!(noise_tolerance(&r, 2, bins, 0.0).is_none());
+        let old = SliceResult {
+            density_se: vec![],
+            ..r
+        };
+        assert!(noise_tolerance(&old, 2, bins, 0.25).is_none());
     }
 }

@@ -10,9 +10,9 @@
 use serde::Serialize;
 
 use super::setup::{entry_setup, typical_path_um};
-use crate::fiber::sweep::{Channels, Variant};
 use crate::cancel::Cancel;
 use crate::fiber::slices::{incident_of_bin, trace_slice, BakeSettings, NoiseTarget};
+use crate::fiber::sweep::{Channels, Variant};
 use crate::math::rng::coordinate_seed;
 use crate::spec::fiber::FiberEntry;
 
@@ -27,10 +27,7 @@ pub const TABLE_10: [(&str, f64, f64); 4] = [
 
 /// Table 10's minutes for a fiber type, if it has a row.
 pub fn table_10_minutes(fiber_type: &str) -> Option<f64> {
-    TABLE_10
-        .iter()
-        .find(|r| r.0 == fiber_type)
-        .map(|r| r.1)
+    TABLE_10.iter().find(|r| r.0 == fiber_type).map(|r| r.1)
 }
 
 /// One entry measured at the thesis's noise.
@@ -96,7 +93,7 @@ pub fn measure(
         photons += r.launched as f64;
         noise += r.noise.median_rel_se;
         thesis += r.noise.thesis_rel_se;
-        capped += usize::from(r.noise.median_rel_se > r.noise.thesis_rel_se);
+        capped += usize::from(!NoiseTarget::Thesis.met_by(&r.noise));
     }
     let kf = k as f64;
     Ok(ThesisCost {

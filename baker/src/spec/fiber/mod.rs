@@ -33,6 +33,7 @@ pub use entry::{FiberEntry, SectionSource, SymmetryMode};
 use raw::RawFiberSpec;
 pub(super) use schema::refine as refine_schema;
 pub use section::MEASURED_SIZE_FACTOR;
+pub use settings::TableStorage;
 pub use surface::MAX_BETA_DEG;
 
 /// A validated fiber spec.
@@ -43,6 +44,8 @@ pub struct FiberSpec {
     pub dyes: Vec<Dye>,
     pub fibers: Vec<FiberEntry>,
     pub bake: BakeSettings,
+    /// How the tables store the traced values (`bake.quantise_to_se`).
+    pub storage: TableStorage,
     pub limits: Limits,
     /// Where `bake.photons_per_direction` is set (line 1 when it is not).
     pub photons_at: (u64, u64),

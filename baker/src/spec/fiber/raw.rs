@@ -53,6 +53,10 @@ pub struct RawBake {
     /// Mantissa bits kept (bit rounding; a whole number up to the precision's: 10 for f16, 23
     /// for f32; all by default).
     pub keep_bits: Option<Spanned<f64>>,
+    /// Noise-aware rounding: each stored value keeps mantissa bits only down to this fraction
+    /// of its bin's standard error (0 = off; 0.25 by default; `keep_bits` stays the upper
+    /// bound).
+    pub quantise_to_se: Option<Spanned<f64>>,
     /// Channels of the tables: linear sRGB (D65), or one per wavelength.
     pub channels: Option<Spanned<String>>,
     /// The spectrum traced, nm.

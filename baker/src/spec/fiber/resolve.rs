@@ -36,6 +36,10 @@ impl FiberCx {
             .bake
             .as_ref()
             .map_or_else(BakeSettings::default, |b| self.bake(&b.value, &limits));
+        let storage = raw
+            .bake
+            .as_ref()
+            .map_or_else(Default::default, |b| self.storage(&b.value));
         let sc = Scope {
             dyes: &dyes,
             broken: &broken,
@@ -70,6 +74,7 @@ impl FiberCx {
             dyes,
             fibers,
             bake,
+            storage,
             limits,
             photons_at,
             sha256: String::new(),

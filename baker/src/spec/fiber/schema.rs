@@ -169,6 +169,21 @@ fn bake(root: &mut Value) {
     bound(prop(b, "photons_per_direction"), PHOTONS_PER_DIRECTION);
     bound(prop(b, "seed"), super::settings::SEED);
     bound(prop(b, "split"), SPLIT);
+    bound(prop(b, "exit_draws"), super::settings::EXIT_DRAWS);
+    bound(
+        prop(b, "max_photons_per_direction"),
+        super::settings::MAX_PHOTONS_PER_DIRECTION,
+    );
+    // A relative standard error, or the word `thesis`.
+    let t = prop(b, "target_rel_se");
+    let mut number = json!({ "type": "number" });
+    bound(&mut number, super::settings::TARGET_REL_SE);
+    let description = t.get("description").cloned();
+    *t = json!({ "anyOf": [number, { "const": "thesis" }, { "type": "null" }] });
+    if let Some(d) = description {
+        t["description"] = d;
+    }
+    bound(prop(b, "quantise_to_se"), super::settings::QUANTISE_TO_SE);
     names(prop(b, "precision"), &keys(&PRECISIONS));
     names(prop(b, "channels"), &keys(&CHANNELS));
     let most = PRECISIONS.iter().map(|(_, p)| p.mantissa_bits()).max();

@@ -5,10 +5,10 @@
 use super::raw::{RawBake, RawLambda};
 use super::FiberCx;
 use crate::fiber::slices::{BakeSettings, NoiseTarget};
-use crate::spec::skin::raw::Token;
 use crate::fiber::sweep::ChannelKind;
 use crate::spec::check::{loc, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
+use crate::spec::skin::raw::Token;
 use crate::spec::yaml::Spanned;
 use formats::Precision;
 
@@ -34,12 +34,47 @@ pub(in crate::spec) const CHANNELS: [(&str, ChannelKind); 2] = [
     ("rgb", ChannelKind::Rgb),
     ("spectral", ChannelKind::Spectral),
 ];
+/// `bake.quantise_to_se`: the rounding error allowed per stored value, as a fraction of its
+/// bin's standard error (0 = off; above one the error would exceed the noise).
+pub(in crate::spec) const QUANTISE_TO_SE: Bounds = Bounds::closed(0.0, 1.0);
 /// `bake.lambda_nm.start` and `end`: the colour-matching tables, nm.
 pub(in crate::spec) const LAMBDA_NM: Bounds = Bounds::closed(360.0, 830.0);
 /// `bake.lambda_nm.step`, nm.
 pub(in crate::spec) const LAMBDA_STEP_NM: Bounds = Bounds::above(0.0, 100.0);
 
+/// How the tables store the traced values (`bake:` settings that change the tables, not the
+/// traced units).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct TableStorage {
+    /// Each value is rounded to the fewest mantissa bits whose rounding error stays within
+    /// this fraction of its bin's standard error (0 = off); `keep_bits` stays the upper bound.
+    pub quantise_to_se: f64,
+}
+
+impl Default for TableStorage {
+    fn default() -> Self {
+        // A quarter of the standard error adds 1/16 of the variance at most (≤ 3 % to the
+        // noise's standard deviation) and frees the bits below it for zstd.
+        TableStorage {
+            quantise_to_se: 0.25,
+        }
+    }
+}
+
 impl FiberCx {
+    /// `bake:`'s table storage settings.
+    pub(super) fn storage(&mut self, b: &RawBake) -> TableStorage {
+        let d = TableStorage::default();
+        TableStorage {
+            quantise_to_se: self.opt_bounds(
+                "bake.quantise_to_se",
+                &b.quantise_to_se,
+                QUANTISE_TO_SE,
+                d.quantise_to_se,
+            ),
+        }
+    }
+
     pub(super) fn bake(&mut self, b: &RawBake, limits: &Limits) -> BakeSettings {
         let d = BakeSettings::default();
         let res_deg = match &b.resolution_deg {
@@ -110,7 +145,7 @@ impl FiberCx {
         match &t.value {
             Token::Text(w) if w == "thesis" => Some(NoiseTarget::Thesis),
             Token::Number(x) => {
-                let v = Spanned::new(*x, t.referenced.clone(), t.defined.clone());
+                let v = Spanned::new(*x, t.referenced, t.defined);
                 self.in_bounds("bake.target_rel_se", &v, TARGET_REL_SE)
                     .map(NoiseTarget::RelSe)
             }

@@ -1,0 +1,177 @@
+//! Issue 18 ("Fiber BCSDFs at the thesis's fidelity"), energy, reporting and storage:
+//! dyed RGB tables never have a channel albedo above one, the manifest reports the albedo
+//! ranges, the noise metric and the photons each direction used, and rounding each value to
+//! a quarter of its bin's standard error shrinks the tables while staying below their noise.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use formats::bcsdf::Bcsdf;
+
+fn bake(dir: &Path, name: &str, yaml: &str) -> PathBuf {
+    let spec = dir.join(format!("{name}.yaml"));
+    std::fs::write(&spec, yaml).unwrap();
+    let out = dir.join(format!("out-{name}"));
+    let st = Command::new(env!("CARGO_BIN_EXE_baker"))
+        .args(["bake", "--quiet", "--threads", "2", "--out"])
+        .arg(&out)
+        .arg(&spec)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    out.join(name)
+}
+
+/// Silk dyed with an orange reactive dye (absorbing around 490 nm, where linear sRGB's R
+/// weights are negative): its R channel leaves the gamut above one without the mapping.
+fn spec(extra: &str) -> String {
+    format!(
+        "version: 1
+bake: {{resolution_deg: 15, photons_per_direction: 4096, seed: 7{extra}}}
+dyes:
+  - name: orange_reactive
+    class: reactive
+    bands: [{{peak_nm: 490, fwhm_nm: 110, peak_eps_l_per_mg_cm: 0.0158}}]
+fibers:
+  - name: silk
+    type: silk
+    section: {{shape: silk}}
+    seed: 1
+    sections: 2
+    sweep: {{dyes: [orange_reactive], depth_of_shade_percent: [1, 4], undyed: true}}
+"
+    )
+}
+
+const TABLES: [&str; 3] = ["section-00", "section-01", "average"];
+
+fn manifest(out: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn issue18_rgb_albedo_stays_within_one_and_the_manifest_reports_ranges_noise_and_photons() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = bake(tmp.path(), "rgb", &spec(""));
+    let m = manifest(&out);
+    let e = &m["entries"][0];
+    let mut lo = [f64::INFINITY; 9];
+    let mut hi = [f64::NEG_INFINITY; 9];
+    for t in TABLES {
+        let t = Bcsdf::open(out.join(format!("silk/{t}.bcsdf"))).unwrap();
+        assert_eq!(t.dir.variants[0], "undyed");
+        for (k, &a) in t.dir.albedo.iter().enumerate() {
+            assert!(a <= 1.0, "Λ[{k}] = {a} > 1");
+            if k % 9 < 3 {
+                assert!((a - 1.0).abs() < 1e-5, "undyed Λ[{k}] = {a}");
+            }
+            lo[k % 9] = lo[k % 9].min(f64::from(a));
+            hi[k % 9] = hi[k % 9].max(f64::from(a));
+        }
+        let clip = &t.dir.metadata["rgb_gamut_clip"];
+        assert!(clip["directions"].as_u64().unwrap() > 0, "{clip}");
+        assert_eq!(t.dir.metadata["quantise_to_se"], 0.25);
+    }
+    // The mapping did act (else this test shows nothing), by no more than the gamut allows.
+    let clip = &e["rgb_gamut_clip"];
+    let f = clip["max_factor"].as_f64().unwrap();
+    assert!(f > 1.0 && f < 1.5, "{clip}");
+    assert!(clip["slices"].as_u64().unwrap() >= clip["directions"].as_u64().unwrap());
+    // Albedo ranges per variant and channel: exactly the tables' (every variant, dyed too).
+    let ranges = e["albedo"].as_array().unwrap();
+    assert_eq!(ranges.len(), 3);
+    for (v, r) in ranges.iter().enumerate() {
+        for c in 0..3 {
+            assert_eq!(r["min"][c].as_f64().unwrap(), lo[v * 3 + c], "{r}");
+            assert_eq!(r["max"][c].as_f64().unwrap(), hi[v * 3 + c], "{r}");
+        }
+        assert!(r["min"][2].as_f64().unwrap() > 0.0, "{r}");
+    }
+    assert_eq!(ranges[2]["variant"], "orange_reactive@4%");
+    // The noise metric covers real bins of the 12 × 24 grid.
+    let noise = &e["noise"];
+    let bins = noise["bins"].as_f64().unwrap();
+    assert!((1.0..=288.0).contains(&bins), "{noise}");
+    let med = noise["median_rel_se"].as_f64().unwrap();
+    assert!(med > 0.0 && med <= noise["p90_rel_se"].as_f64().unwrap());
+    // Photons per stored direction: both sections, two whole batches each.
+    let p = &e["photons"];
+    let per = 2 * e["photons_per_direction"].as_u64().unwrap();
+    assert_eq!(
+        (p["min"].as_u64(), p["median"].as_u64()),
+        (Some(per), Some(per))
+    );
+    assert_eq!(p["max"].as_u64(), Some(per));
+    let n = e["stored_directions"].as_u64().unwrap();
+    assert_eq!(p["total"].as_u64(), Some(n * per));
+    assert!(
+        !m.to_string().contains("seconds"),
+        "wall-clock in the manifest"
+    );
+}
+
+/// Spectral tables are never mapped (each wavelength's albedo is ≤ 1 by itself).
+#[test]
+fn issue18_spectral_tables_are_not_mapped() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = bake(
+        tmp.path(),
+        "spectral",
+        &spec(", channels: spectral, lambda_nm: {start: 450, end: 650, step: 50}")
+            .replace("resolution_deg: 15", "resolution_deg: 30"),
+    );
+    let e = &manifest(&out)["entries"][0];
+    assert!(e["rgb_gamut_clip"].is_null(), "{e}");
+    let t = Bcsdf::open(out.join("silk/average.bcsdf")).unwrap();
+    assert!(t.dir.metadata["rgb_gamut_clip"].is_null());
+    assert!(t.dir.albedo.iter().all(|&a| a <= 1.0 + 1e-6));
+}
+
+/// Rounding to a quarter of each bin's standard error against no rounding (same traces): the
+/// `.bcsdf` and HDF5 files shrink, the HDF5 file holds what the `.bcsdf` decodes to, and the
+/// RMS relative change is below the table's own noise.
+#[test]
+fn issue18_rounding_to_the_noise_shrinks_tables_below_their_noise() {
+    let tmp = tempfile::tempdir().unwrap();
+    let full = bake(tmp.path(), "full", &spec(", quantise_to_se: 0"));
+    let q = bake(tmp.path(), "quarter", &spec(", quantise_to_se: 0.25"));
+    let noise = manifest(&q)["entries"][0]["noise"]["median_rel_se"]
+        .as_f64()
+        .unwrap();
+    let size = |d: &Path, f: &str| std::fs::metadata(d.join("silk").join(f)).unwrap().len();
+    for f in ["section-00.bcsdf", "average.bcsdf", "silk.h5"] {
+        let (a, b) = (size(&full, f), size(&q, f));
+        assert!(b < a, "{f}: {b} bytes rounded, {a} not");
+    }
+    let h = hdf5_metno::File::open(q.join("silk/silk.h5")).unwrap();
+    for t in TABLES {
+        let a = Bcsdf::open(full.join(format!("silk/{t}.bcsdf"))).unwrap();
+        let b = Bcsdf::open(q.join(format!("silk/{t}.bcsdf"))).unwrap();
+        assert_eq!(a.dir.albedo, b.dir.albedo, "{t}: albedo is not rounded");
+        assert_eq!(a.dir.metadata["quantise_to_se"], 0.0);
+        let f5: Vec<f32> = h
+            .dataset(&format!("{t}/f_normalised"))
+            .unwrap()
+            .read_raw()
+            .unwrap();
+        let (bins, per) = (a.dir.bins(), a.dir.bins() * 9);
+        let (mut s2, mut n) = (0.0, 0usize);
+        for i in 0..a.dir.n_wi() {
+            let (x, y) = (a.decode(i).unwrap(), b.decode(i).unwrap());
+            assert_eq!(&f5[i * per..(i + 1) * per], &y.values[..], "{t} wi {i}");
+            for part in 0..9 {
+                let xs = &x.values[part * bins..(part + 1) * bins];
+                let max = xs.iter().copied().fold(0.0, f32::max);
+                for (k, &xk) in xs.iter().enumerate() {
+                    if xk > 0.01 * max {
+                        let r = f64::from(y.values[part * bins + k] - xk) / f64::from(xk);
+                        s2 += r * r;
+                        n += 1;
+                    }
+                }
+            }
+        }
+        let rms = (s2 / n as f64).sqrt();
+        assert!(rms > 0.0 && rms < noise, "{t}: RMS {rms}, noise {noise}");
+    }
+}
