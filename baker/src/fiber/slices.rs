@@ -6,8 +6,7 @@
 //! in the spec's `bake:` block and each tested against plain tracing
 //! (`baker/tests/fiber_references.rs`, `estimators_agree_with_plain_tracing`):
 //! - **Stratified entry offsets**: photon j of a batch of n enters at (j + u)/n across the
-//!   beam, so the beam is covered evenly. The beam is the one that covers the fiber's shadow
-//!   from every direction of the incoming bin; photons that miss carry no power.
+//!   beam, so the beam is covered evenly.
 //! - **Splitting at interfaces** (`split` for events met from outside: the R lobe and the
 //!   entry; `exit_draws` for events met from inside: every exit lobe TT, TRT, … and the
 //!   internal reflections): the event is drawn k times; every draw that leaves is followed

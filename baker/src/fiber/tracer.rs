@@ -169,6 +169,7 @@ impl Draws {
 pub(crate) struct Setup<'a> {
     section: &'a Section,
     inc: Incident,
+    s_max: f64,
     /// W(φc)·cos θc, the normalisation of spread weights.
     w_centre: f64,
     surface: Surface,
@@ -178,9 +179,6 @@ pub(crate) struct Setup<'a> {
     dhat: [f64; 2],
     e_perp: [f64; 2],
     beam: (f64, f64),
-    /// With a spread: a beam (in every φ's own cross axis) that covers the shadow from every
-    /// φ of the bin ([`Setup::new`]).
-    bin_beam: (f64, f64),
     r_start: f64,
     /// Cuticle: (scale length L, ds/dz, s_max, bounding radius of the section).
     cuticle: Option<(f64, f64, f64, f64)>,
@@ -220,24 +218,6 @@ impl<'a> Setup<'a> {
         let s_max = cut.map_or(1.0, |c| c.1);
         let (lo, hi) = fiber.section.extent(e_perp);
         let rb = fiber.section.bound_radius_um();
-        let bin_beam = match inc.spread {
-            None => (lo * s_max, hi * s_max),
-            Some((_, dp)) => {
-                // The extents q·e(φ) are Lipschitz in φ with constant rb (|d(q·e)/dφ| ≤ |q|),
-                // so the extremes over 65 samples ±rb·δ/2 bound them over the whole bin.
-                const K: usize = 64;
-                let delta = dp / K as f64;
-                let (mut l, mut h) = (f64::INFINITY, f64::NEG_INFINITY);
-                for i in 0..=K {
-                    let (sp, cp) = (inc.phi_rad + dp * (i as f64 / K as f64 - 0.5)).sin_cos();
-                    let (a, b) = fiber.section.extent([sp, -cp]);
-                    l = l.min(a);
-                    h = h.max(b);
-                }
-                let m = 0.5 * rb * delta;
-                ((l - m) * s_max, (h + m) * s_max)
-            }
-        };
         Self {
             section: &fiber.section,
             inc,
@@ -248,7 +228,7 @@ impl<'a> Setup<'a> {
             dhat,
             e_perp,
             beam: (lo * s_max, hi * s_max),
-            bin_beam,
+            s_max,
             r_start: rb * s_max * 1.01 + 1.0,
             cuticle: fiber
                 .cuticle
@@ -278,10 +258,7 @@ impl<'a> Setup<'a> {
         let (d, dhat, e_perp, beam, g) = match self.inc.spread {
             None => (self.d, self.dhat, self.e_perp, self.beam, 1.0),
             Some((dt, dp)) => {
-                // Uniform in solid angle: uniform in sin θ and φ. The beam is the one that
-                // covers the shadow from every φ of the bin ([`Setup::bin_beam`]); the photons
-                // that miss carry no power, so the weight ∝ beam width × cos θ is unbiased for
-                // the power W(φ)·cos θ the fiber intercepts (§5.5, Eq. 17's A(ω)·sin(ω, ω_f)).
+                // Uniform in solid angle: uniform in sin θ and φ.
                 let (s0, s1) = (
                     (self.inc.theta_rad - 0.5 * dt).sin(),
                     (self.inc.theta_rad + 0.5 * dt).sin(),
@@ -292,7 +269,8 @@ impl<'a> Setup<'a> {
                 let (sp, cp) = phi.sin_cos();
                 let dhat = [-cp, -sp];
                 let e_perp = [sp, -cp];
-                let beam = self.bin_beam;
+                let (lo, hi) = self.section.extent(e_perp);
+                let beam = (lo * self.s_max, hi * self.s_max);
                 let g = (beam.1 - beam.0) * ct / self.w_centre;
                 ([-ct * cp, -ct * sp, -st], dhat, e_perp, beam, g)
             }

@@ -77,12 +77,27 @@ impl GamutClip {
             if undyed || m <= 1.0 {
                 continue;
             }
+            // The divisor is itself an estimate: Λ_c/m has, to first order, the variance
+            // (SE_c² + (Λ_c/m)²·SE_m² − 2(Λ_c/m)·cov)/m². The channels share their photons,
+            // so cov ≥ 0 and dropping it bounds the error from above (the max channel
+            // itself keeps SE_m/m).
+            let km = chans.start
+                + (0..3)
+                    .max_by(|&a, &b| {
+                        r.albedo[chans.start + a].total_cmp(&r.albedo[chans.start + b])
+                    })
+                    .unwrap_or(0);
+            let se_m = r.albedo_se[km];
             for k in chans {
                 r.fraction[k * bins..(k + 1) * bins]
                     .iter_mut()
                     .for_each(|x| *x /= m);
                 r.albedo[k] /= m;
-                r.albedo_se[k] /= m;
+                r.albedo_se[k] = if k == km {
+                    r.albedo_se[k] / m
+                } else {
+                    r.albedo_se[k].hypot(r.albedo[k] * se_m) / m
+                };
             }
             // `density_se` is the error of variant 0's density: it follows its values.
             if v == 0 {
@@ -199,8 +214,12 @@ mod tests {
         for (k, (x, y)) in r.normalised(&grid).iter().zip(&f_hat).enumerate() {
             assert!((x - y).abs() <= 1e-12 * y.abs(), "f̂[{k}] {x} vs {y}");
         }
-        for k in 3..6 {
-            assert!((r.albedo_se[k] / r.albedo[k] - 0.01).abs() < 1e-12);
+        // The max channel's relative error is kept; the others add the divisor's
+        // (1 % relative each here): √(0.01² + 0.01²) relative.
+        assert!((r.albedo_se[3] / r.albedo[3] - 0.01).abs() < 1e-12);
+        for k in 4..6 {
+            let rel = r.albedo_se[k] / r.albedo[k];
+            assert!((rel - 0.01f64.hypot(0.01)).abs() < 1e-12, "{rel}");
         }
         assert_eq!(r.density_se, before.density_se, "variant 0 was not scaled");
         // Within gamut: nothing moves.
