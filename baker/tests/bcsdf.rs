@@ -1,31 +1,11 @@
 //! BCSDF tables end to end: `baker bake` on small fiber specs, read back through the
 //! renderer's reader (`formats::bcsdf`) and the HDF5 file.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
+use common::bake_spec as bake;
 use formats::bcsdf::{direction, Bcsdf};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
-
-fn bake(dir: &Path, name: &str, yaml: &str, threads: usize) -> PathBuf {
-    let spec = dir.join(format!("{name}.yaml"));
-    std::fs::write(&spec, yaml).unwrap();
-    let out = dir.join(format!("out-{name}-{threads}"));
-    let st = Command::new(env!("CARGO_BIN_EXE_baker"))
-        .args([
-            "bake",
-            "--quiet",
-            "--threads",
-            &threads.to_string(),
-            "--out",
-        ])
-        .arg(&out)
-        .arg(&spec)
-        .status()
-        .unwrap();
-    assert!(st.success());
-    out.join(name)
-}
 
 const WHITE: &str = "version: 1
 bake: {resolution_deg: 10, photons_per_direction: 8192, seed: 5}

@@ -6,8 +6,6 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-
 use baker::cancel::Cancel;
 use baker::fiber::section::generate::{generate, Shape};
 use baker::fiber::slices::{incident_of_bin, trace_slice, BakeSettings, SliceResult};
@@ -21,24 +19,6 @@ use statrs::distribution::{ContinuousCDF, Normal};
 fn sidak_z(n: usize, alpha: f64) -> f64 {
     let a1 = 1.0 - (1.0 - alpha).powf(1.0 / n.max(1) as f64);
     Normal::new(0.0, 1.0).unwrap().inverse_cdf(1.0 - 0.5 * a1)
-}
-
-fn bake(dir: &Path, name: &str, yaml: &str) -> PathBuf {
-    let spec = dir.join(format!("{name}.yaml"));
-    std::fs::write(&spec, yaml).unwrap();
-    let out = dir.join("out");
-    let o = common::baker_in(
-        dir,
-        &[
-            "bake",
-            "--quiet",
-            "--out",
-            out.to_str().unwrap(),
-            spec.to_str().unwrap(),
-        ],
-    );
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    out.join(name)
 }
 
 /// Solid angle of θ row `it` on a grid of `res_deg`, sr (written out, not the grid's own).
@@ -80,7 +60,10 @@ fibers:
     depth_of_shade_percent: 0.2
 "
     );
-    let t = Bcsdf::open(bake(tmp.path(), "dyed", &yaml).join("circle/section-00.bcsdf")).unwrap();
+    let t = Bcsdf::open(
+        common::bake_spec(tmp.path(), "dyed", &yaml, 2).join("circle/section-00.bcsdf"),
+    )
+    .unwrap();
     let d = &t.dir;
     assert_eq!(d.channels, ["550nm", "560nm"]);
     assert_eq!(d.variants.len(), 1);
@@ -356,7 +339,7 @@ fn symmetry_reduced_tables_match_full_traces() {
 "
         );
     }
-    let out = bake(tmp.path(), "sym", &yaml);
+    let out = common::bake_spec(tmp.path(), "sym", &yaml, 2);
     let mut zs = Vec::new();
     for (name, stored_auto) in [
         ("trilobal", 24 * 12 / 12),

@@ -3,24 +3,11 @@
 //! ranges, the noise metric and the photons each direction used, and rounding each value to
 //! a quarter of its bin's standard error shrinks the tables while staying below their noise.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+
+use std::path::Path;
 
 use formats::bcsdf::Bcsdf;
-
-fn bake(dir: &Path, name: &str, yaml: &str) -> PathBuf {
-    let spec = dir.join(format!("{name}.yaml"));
-    std::fs::write(&spec, yaml).unwrap();
-    let out = dir.join(format!("out-{name}"));
-    let st = Command::new(env!("CARGO_BIN_EXE_baker"))
-        .args(["bake", "--quiet", "--threads", "2", "--out"])
-        .arg(&out)
-        .arg(&spec)
-        .status()
-        .unwrap();
-    assert!(st.success());
-    out.join(name)
-}
 
 /// Silk dyed with an orange reactive dye (absorbing around 490 nm, where linear sRGB's R
 /// weights are negative): its R channel leaves the gamut above one without the mapping.
@@ -52,7 +39,7 @@ fn manifest(out: &Path) -> serde_json::Value {
 #[test]
 fn issue18_rgb_albedo_stays_within_one_and_the_manifest_reports_ranges_noise_and_photons() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = bake(tmp.path(), "rgb", &spec(""));
+    let out = common::bake_spec(tmp.path(), "rgb", &spec(""), 2);
     let m = manifest(&out);
     let e = &m["entries"][0];
     let mut lo = [f64::INFINITY; 9];
@@ -114,11 +101,12 @@ fn issue18_rgb_albedo_stays_within_one_and_the_manifest_reports_ranges_noise_and
 #[test]
 fn issue18_spectral_tables_are_not_mapped() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = bake(
+    let out = common::bake_spec(
         tmp.path(),
         "spectral",
         &spec(", channels: spectral, lambda_nm: {start: 450, end: 650, step: 50}")
             .replace("resolution_deg: 15", "resolution_deg: 30"),
+        2,
     );
     let e = &manifest(&out)["entries"][0];
     assert!(e["rgb_gamut_clip"].is_null(), "{e}");
@@ -133,8 +121,8 @@ fn issue18_spectral_tables_are_not_mapped() {
 #[test]
 fn issue18_rounding_to_the_noise_shrinks_tables_below_their_noise() {
     let tmp = tempfile::tempdir().unwrap();
-    let full = bake(tmp.path(), "full", &spec(", quantise_to_se: 0"));
-    let q = bake(tmp.path(), "quarter", &spec(", quantise_to_se: 0.25"));
+    let full = common::bake_spec(tmp.path(), "full", &spec(", quantise_to_se: 0"), 2);
+    let q = common::bake_spec(tmp.path(), "quarter", &spec(", quantise_to_se: 0.25"), 2);
     let noise = manifest(&q)["entries"][0]["noise"]["median_rel_se"]
         .as_f64()
         .unwrap();

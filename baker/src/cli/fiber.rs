@@ -9,7 +9,9 @@ use serde_json::json;
 use crate::error::UsageError;
 use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
+use crate::fiber::slices::BakeSettings;
 use crate::fiber::{trace, AngularGrid, Cuticle, Fiber, Incident, Section, Surface, TraceOptions};
+use crate::spec::fiber::FiberEntry;
 
 #[derive(Debug, Subcommand)]
 pub enum FiberCommand {
@@ -148,54 +150,46 @@ fn bench_cases(a: &FiberBenchArgs) -> anyhow::Result<Vec<(String, Fiber, f64)>> 
         cuticle: None,
     };
     let mut cases = vec![("smooth circle (10 µm, η 1.55)".to_string(), smooth, 0.0)];
+    for (e, _) in spec_entries(&a.specs, &a.entries)? {
+        cases.push((e.name.clone(), e.fiber(), e.mua_per_um(550.0)));
+    }
+    Ok(cases)
+}
+
+/// The entries of `specs` named in `names` (every entry when empty), each with its spec's
+/// `bake:` settings; a name no spec has is a usage error that lists the entries.
+fn spec_entries(
+    specs: &[PathBuf],
+    names: &[String],
+) -> anyhow::Result<Vec<(FiberEntry, BakeSettings)>> {
     let mut found = Vec::new();
-    for spec in &a.specs {
+    let mut chosen = Vec::new();
+    for spec in specs {
         let s = crate::spec::load_fiber(spec)
             .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
-        for e in &s.fibers {
+        for e in s.fibers {
             found.push(e.name.clone());
-            if a.entries.is_empty() || a.entries.contains(&e.name) {
-                cases.push((e.name.clone(), e.fiber(), e.mua_per_um(550.0)));
+            if names.is_empty() || names.contains(&e.name) {
+                chosen.push((e, s.bake.clone()));
             }
         }
     }
-    if let Some(missing) = a.entries.iter().find(|n| !found.contains(n)) {
+    if let Some(missing) = names.iter().find(|n| !found.contains(n)) {
         let names: Vec<&str> = found.iter().map(String::as_str).collect();
         return Err(usage(crate::spec::names::unknown_entry(
-            &shown_list(&a.specs),
+            &shown_list(specs),
             missing,
             &names,
         )));
     }
-    Ok(cases)
+    Ok(chosen)
 }
 
 /// `fiber bench --thesis`: every selected entry at the thesis's noise, next to Table 10.
 fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     use crate::bake::fiber::thesis;
     use std::fmt::Write as _;
-    let mut entries = Vec::new();
-    for spec in &a.specs {
-        let s = crate::spec::load_fiber(spec)
-            .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
-        for e in s.fibers {
-            if a.entries.is_empty() || a.entries.contains(&e.name) {
-                entries.push((e, s.bake.clone()));
-            }
-        }
-    }
-    if let Some(missing) = a
-        .entries
-        .iter()
-        .find(|n| !entries.iter().any(|(e, _)| &e.name == *n))
-    {
-        let names: Vec<&str> = entries.iter().map(|(e, _)| e.name.as_str()).collect();
-        return Err(usage(crate::spec::names::unknown_entry(
-            &shown_list(&a.specs),
-            missing,
-            &names,
-        )));
-    }
+    let entries = spec_entries(&a.specs, &a.entries)?;
     let events = a.progress.events();
     let bar = a
         .progress
@@ -223,7 +217,7 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
         "ratio"
     )?;
     for (i, (e, st)) in entries.iter().enumerate() {
-        let st = crate::fiber::slices::BakeSettings {
+        let st = BakeSettings {
             split: a.split.unwrap_or(st.split),
             exit_draws: a.exit_draws.unwrap_or(st.exit_draws),
             ..st.clone()

@@ -57,6 +57,28 @@ pub fn baker_in(dir: &Path, args: &[&str]) -> Output {
         .expect("baker runs")
 }
 
+/// Writes `yaml` to `dir/<name>.yaml`, bakes it quietly with `threads` worker threads into
+/// `dir/out-<name>-<threads>` (the bake must succeed) and returns the spec's output folder.
+pub fn bake_spec(dir: &Path, name: &str, yaml: &str, threads: usize) -> PathBuf {
+    let spec = dir.join(format!("{name}.yaml"));
+    std::fs::write(&spec, yaml).unwrap();
+    let out = dir.join(format!("out-{name}-{threads}"));
+    let o = baker_in(
+        dir,
+        &[
+            "bake",
+            "--quiet",
+            "--threads",
+            &threads.to_string(),
+            "--out",
+            out.to_str().unwrap(),
+            spec.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    out.join(name)
+}
+
 /// Every file under `dir` (relative path → bytes), leaving out the cache, wall-clock
 /// `timing.json` and the private staging folder of a bake that was killed
 /// (`.<spec>.partial-<pid>`: never a final name; the next bake removes it).
