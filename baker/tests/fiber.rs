@@ -242,8 +242,10 @@ fn cli_trace_json_and_png() {
         (sum - a).abs() < 1e-9 && a < 1.0 && a > 0.5,
         "dyed silk albedo {a}"
     );
-    assert_eq!(v["hist2d"].as_array().unwrap().len(), 90);
-    assert_eq!(v["dphi_edges_deg"].as_array().unwrap().len(), 181);
+    // The entry's own bins (specs/fibers.yaml bakes at 6°).
+    assert_eq!(v["bake"]["resolution_deg"], 6.0);
+    assert_eq!(v["hist2d"].as_array().unwrap().len(), 30);
+    assert_eq!(v["dphi_edges_deg"].as_array().unwrap().len(), 61);
     assert!(v["photons_per_s"].as_f64().unwrap() > 0.0);
     assert!(image::open(&png).is_ok());
     // Command-line fibers.

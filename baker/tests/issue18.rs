@@ -163,3 +163,114 @@ fn issue18_rounding_to_the_noise_shrinks_tables_below_their_noise() {
         assert!(rms > 0.0 && rms < noise, "{t}: RMS {rms}, noise {noise}");
     }
 }
+
+/// `fiber trace SPEC --entry E` traces with the entry's `bake:` settings (bins, estimators,
+/// target), reports them with `seconds` and `photons`, and its `hist2d_se`/`dphi_hist_se` are
+/// the estimator's own: two seeds differ by what they claim (pooled χ² per bin ≈ 1; the same
+/// statistic for the plain tracer's per-photon errors, which ignore the split draws'
+/// correlation, would be far above). Flags override the spec.
+#[test]
+fn issue18_fiber_trace_uses_the_bake_settings_and_reports_its_own_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = tmp.path().join("t.yaml");
+    std::fs::write(
+        &spec,
+        "version: 1
+bake: {resolution_deg: 10, photons_per_direction: 65536, seed: 3, split: 2, exit_draws: 8, target_rel_se: 0.2}
+fibers:
+  - {name: wool, type: wool, section: {shape: wool}, diameter_um: 20}
+",
+    )
+    .unwrap();
+    let s = spec.to_str().unwrap();
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "fiber",
+            "trace",
+            s,
+            "--entry",
+            "wool",
+            "--theta-i",
+            "-30",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let o = common::baker(&args);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let a = run(&[]);
+    assert_eq!(a["estimator"], "bake");
+    assert_eq!(a["bake"]["split"], 2);
+    assert_eq!(a["bake"]["exit_draws"], 8);
+    assert_eq!(a["bake"]["resolution_deg"], 10.0);
+    assert_eq!(a["bake"]["seed"], 3);
+    assert_eq!(a["bake"]["target_rel_se"], 0.2);
+    assert_eq!(a["reached_target"], true);
+    assert!(a["seconds"].as_f64().unwrap() > 0.0);
+    assert!(a["photons_launched"].as_u64().unwrap() >= 65536);
+    assert!(a["photons"].as_u64().unwrap() > 0);
+    assert!(a["noise"]["median_rel_se"].as_f64().unwrap() <= 0.2);
+    let rows = a["hist2d"].as_array().unwrap();
+    assert_eq!((rows.len(), rows[0].as_array().unwrap().len()), (18, 36));
+    // Flags override the spec.
+    let b = run(&[
+        "--resolution-deg",
+        "15",
+        "--split",
+        "1",
+        "--exit-draws",
+        "1",
+    ]);
+    assert_eq!(
+        (
+            b["bake"]["split"].as_u64(),
+            b["hist2d"].as_array().unwrap().len()
+        ),
+        (Some(1), 12)
+    );
+    // Two seeds differ by what their errors claim.
+    let flat = |v: &serde_json::Value, k: &str| -> Vec<f64> {
+        let x = &v[k];
+        let rows = x.as_array().unwrap();
+        if rows[0].is_array() {
+            rows.iter()
+                .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+                .collect()
+        } else {
+            rows.iter().map(|x| x.as_f64().unwrap()).collect()
+        }
+    };
+    let mut chi2 = [(0.0, 0usize); 2];
+    for seed in ["11", "13"] {
+        let (p, q) = (
+            run(&["--seed", seed]),
+            run(&["--seed", &(seed.parse::<u32>().unwrap() + 1).to_string()]),
+        );
+        for (k, (v, se)) in [("hist2d", "hist2d_se"), ("dphi_hist", "dphi_hist_se")]
+            .iter()
+            .enumerate()
+        {
+            let (pv, ps, qv, qs) = (flat(&p, v), flat(&p, se), flat(&q, v), flat(&q, se));
+            for i in 0..pv.len() {
+                let m = 0.5 * (pv[i] + qv[i]);
+                if m > 0.0 && ps[i] > 0.0 && qs[i] > 0.0 && ps[i] < 0.1 * m {
+                    chi2[k].0 += (pv[i] - qv[i]).powi(2) / (ps[i].powi(2) + qs[i].powi(2));
+                    chi2[k].1 += 1;
+                }
+            }
+        }
+    }
+    let [(cb, kb), (cc, kc)] = chi2;
+    assert!(kb > 200 && kc > 40, "{chi2:?}");
+    assert!(
+        (0.8..1.3).contains(&(cb / kb as f64)),
+        "χ²/bin {}",
+        cb / kb as f64
+    );
+    assert!(
+        (0.6..1.6).contains(&(cc / kc as f64)),
+        "χ²/column {}",
+        cc / kc as f64
+    );
+}

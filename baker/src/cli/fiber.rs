@@ -80,18 +80,27 @@ pub struct TraceArgs {
     /// φi, degrees: azimuth of ωi about the fiber axis, from +x towards +y.
     #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
     pub phi_i: f64,
-    /// Photons launched across the beam.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub photons: u64,
-    /// Seed: the same inputs and seed give bit-identical output for any thread count.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Photons launched across the beam [default: 1000000; with a spec entry, its
+    /// `bake.photons_per_direction`, the first pass when it has a `target_rel_se`].
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Seed: the same inputs and seed give bit-identical output for any thread count
+    /// [default: 1; with a spec entry, its `bake.seed`].
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Bin size of θo and Δφ, degrees (must divide 180).
-    #[arg(long, default_value_t = 2.0)]
-    pub resolution_deg: f64,
+    /// Bin size of θo and Δφ, degrees (must divide 180) [default: 2; with a spec entry, its
+    /// `bake.resolution_deg`].
+    #[arg(long)]
+    pub resolution_deg: Option<f64>,
+    /// With a spec entry: override its `bake.split` (draws per event met from outside).
+    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub split: Option<u32>,
+    /// With a spec entry: override its `bake.exit_draws` (draws per event met from inside).
+    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub exit_draws: Option<u32>,
     /// Write the outgoing slice as a false-colour log PNG (like Table 8) to FILE.png; with
     /// several --entry, FILE is a folder and each entry gets `<entry>.png` in it.
     #[arg(short = 'o', long = "out", alias = "png", value_name = "FILE")]
@@ -393,7 +402,12 @@ fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
                         crate::suggest::suffix(other, &names)
                     ))
                 })?;
-            generate(shape, diameter.unwrap_or(10.0), a.seed, a.variant)?
+            generate(
+                shape,
+                diameter.unwrap_or(10.0),
+                a.seed.unwrap_or(1),
+                a.variant,
+            )?
         }
     };
     if !(a.eta >= 1.0 && a.eta <= 3.0) {
@@ -428,35 +442,50 @@ fn fiber_from_flags(a: &TraceArgs) -> anyhow::Result<(Fiber, f64, String)> {
     Ok((fiber, a.mua_per_um.unwrap_or(0.0), s.to_string()))
 }
 
-/// The fibers to trace (spec entries, or the flags), each with its μa per µm and label.
-fn fibers_of(a: &TraceArgs) -> anyhow::Result<Vec<(Fiber, f64, String)>> {
+/// One fiber `fiber trace` traces: with `bake`, a spec entry traced with its bake's settings
+/// ([`crate::bake::fiber::trace_direction`]); without, a fiber from the flags, traced plainly.
+struct TraceTarget {
+    fiber: Fiber,
+    mua_per_um: f64,
+    label: String,
+    bake: Option<BakeSettings>,
+}
+
+/// The fibers to trace: the spec entries in the order of `--entry`, or the flags.
+fn targets_of(a: &TraceArgs) -> anyhow::Result<Vec<TraceTarget>> {
     if a.specs.is_empty() {
-        return Ok(vec![fiber_from_flags(a)?]);
+        let (fiber, mua_per_um, label) = fiber_from_flags(a)?;
+        return Ok(vec![TraceTarget {
+            fiber,
+            mua_per_um,
+            label,
+            bake: None,
+        }]);
     }
     if a.entries.is_empty() {
         return Err(usage("--entry NAME is required with a spec"));
     }
-    let mut fibers = Vec::new();
-    for spec in &a.specs {
-        let s = crate::spec::load_fiber(spec)
-            .map_err(|e| usage(e.to_string().trim_end().to_string()))?;
-        fibers.extend(s.fibers);
+    let found = spec_entries(&a.specs, &a.entries)?;
+    let mut out = Vec::new();
+    for name in &a.entries {
+        let (e, bake) = found.iter().find(|(e, _)| &e.name == name).expect("found");
+        let mut st = BakeSettings {
+            photons: a.photons.unwrap_or(bake.photons),
+            res_deg: a.resolution_deg.unwrap_or(bake.res_deg),
+            seed: a.seed.unwrap_or(bake.seed),
+            split: a.split.unwrap_or(bake.split),
+            exit_draws: a.exit_draws.unwrap_or(bake.exit_draws),
+            ..bake.clone()
+        };
+        st.max_photons = st.max_photons.max(st.photons);
+        out.push(TraceTarget {
+            fiber: e.fiber(),
+            mua_per_um: a.mua_per_um.unwrap_or_else(|| e.mua_per_um(a.lambda_nm)),
+            label: e.name.clone(),
+            bake: Some(st),
+        });
     }
-    a.entries
-        .iter()
-        .map(|name| {
-            let e = fibers.iter().find(|f| &f.name == name).ok_or_else(|| {
-                let names: Vec<&str> = fibers.iter().map(|f| f.name.as_str()).collect();
-                usage(crate::spec::names::unknown_entry(
-                    &shown_list(&a.specs),
-                    name,
-                    &names,
-                ))
-            })?;
-            let mua = a.mua_per_um.unwrap_or_else(|| e.mua_per_um(a.lambda_nm));
-            Ok((e.fiber(), mua, e.name.clone()))
-        })
-        .collect()
+    Ok(out)
 }
 
 /// Spec paths as a comma-separated list for messages.
@@ -468,148 +497,304 @@ fn shown_list(paths: &[PathBuf]) -> String {
 }
 
 fn run_trace(a: TraceArgs) -> anyhow::Result<()> {
-    let fibers = fibers_of(&a)?;
+    let targets = targets_of(&a)?;
     if !(-90.0..=90.0).contains(&a.theta_i) {
         return Err(usage(format!(
             "--theta-i {} out of range [-90, 90]",
             a.theta_i
         )));
     }
-    if a.photons == 0 {
+    if a.photons == Some(0) {
         return Err(usage("--photons must be at least 1"));
     }
-    for (_, mua, _) in &fibers {
-        if !(*mua >= 0.0 && mua.is_finite()) {
-            return Err(usage(format!("--mua-per-um {mua} must be ≥ 0")));
+    for t in &targets {
+        if !(t.mua_per_um >= 0.0 && t.mua_per_um.is_finite()) {
+            return Err(usage(format!("--mua-per-um {} must be ≥ 0", t.mua_per_um)));
         }
     }
-    let grid = AngularGrid::new(a.resolution_deg).map_err(usage)?;
+    let res_deg = |t: &TraceTarget| t.bake.as_ref().map_or(2.0, |b| b.res_deg);
+    for t in &targets {
+        AngularGrid::new(a.resolution_deg.unwrap_or(res_deg(t))).map_err(usage)?;
+    }
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(t) = a.threads {
         builder = builder.num_threads(t);
     }
     let pool = builder.build()?;
     let events = a.progress.events();
-    let total = fibers.len();
-    for (index, (fiber, mua, label)) in fibers.into_iter().enumerate() {
+    let total = targets.len();
+    for (index, t) in targets.iter().enumerate() {
         let png = match &a.out {
-            Some(dir) if total > 1 => Some(dir.join(format!("{label}.png"))),
+            Some(dir) if total > 1 => Some(dir.join(format!("{}.png", t.label))),
             o => o.clone(),
         };
+        let photons = (t.bake.as_ref()).map_or(a.photons.unwrap_or(1_000_000), |b| b.photons);
         events.emit(
-            json!({"event": "trace_started", "fiber": label, "index": index,
-            "total": total, "photons": a.photons}),
+            json!({"event": "trace_started", "fiber": t.label, "index": index,
+            "total": total, "photons": photons}),
         );
-        trace_one(&a, &pool, grid, (&fiber, mua, &label), png.as_deref())?;
+        let grid = AngularGrid::new(a.resolution_deg.unwrap_or(res_deg(t))).map_err(usage)?;
+        let report = pool.install(|| match &t.bake {
+            Some(st) => trace_with_bake(&a, t, st),
+            None => Ok(trace_plain(&a, t, grid, photons)),
+        })?;
+        report.write(&a, t, png.as_deref())?;
         events.emit(
-            json!({"event": "trace_finished", "fiber": label, "index": index,
+            json!({"event": "trace_finished", "fiber": t.label, "index": index,
             "total": total}),
         );
     }
     Ok(())
 }
 
-/// Traces one fiber as `a` asks and reports it (summary or JSON line, and the PNG).
-fn trace_one(
-    a: &TraceArgs,
-    pool: &rayon::ThreadPool,
+/// What `fiber trace` prints about one fiber, from either tracer.
+struct TraceReport {
     grid: AngularGrid,
-    (fiber, mua, label): (&Fiber, f64, &str),
-    png: Option<&std::path::Path>,
-) -> anyhow::Result<()> {
+    albedo: (f64, f64),
+    /// Fractions of the intercepted power per bin, `[θo][Δφ]`, and their standard errors.
+    hist2d: (Vec<f64>, Vec<f64>),
+    /// The same summed over θo, per Δφ.
+    dphi: (Vec<f64>, Vec<f64>),
+    projected_width_um: f64,
+    launched: u64,
+    intercepted: u64,
+    seconds: f64,
+    /// The plain tracer's extras: intercepted width (µm, SE), photons lost, surface
+    /// fallbacks, mean path inside (µm).
+    plain: Option<((f64, f64), u64, u64, f64)>,
+    /// The bake's estimator: its settings, the slice's noise and whether it met the target.
+    bake: Option<(BakeSettings, crate::fiber::slices::Noise, Option<bool>)>,
+}
+
+/// A fiber from the flags: the plain tracer, photon by photon, with per-photon errors.
+fn trace_plain(a: &TraceArgs, t: &TraceTarget, grid: AngularGrid, photons: u64) -> TraceReport {
     let inc = Incident::from_deg(a.theta_i, a.phi_i);
-    let bar =
-        (!a.json && a.progress.bar()).then(|| crate::cli::progress::bar(a.photons, "photons"));
+    let bar = (!a.json && a.progress.bar()).then(|| crate::cli::progress::bar(photons, "photons"));
     let o = TraceOptions {
-        photons: a.photons,
-        seed: a.seed,
+        photons,
+        seed: a.seed.unwrap_or(1),
         grid,
-        mua_per_um: vec![mua],
+        mua_per_um: vec![t.mua_per_um],
         progress: crate::cli::progress::reporter(&bar),
     };
-    let r = pool.install(|| trace(fiber, inc, &o));
+    let r = trace(&t.fiber, inc, &o);
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let t = &r.tally;
-    let (albedo, albedo_se) = t.albedo(0);
-    let (h2, h2_se) = t.hist2d(0);
-    let (dh, dh_se) = t.dphi_hist(0);
-    if let Some(png) = png {
-        // Radiance-like density: fraction per solid angle and cos θo.
-        let (nt, np) = (grid.n_theta, grid.n_phi);
-        let density: Vec<f64> = (0..nt * np)
-            .map(|b| {
-                let it = b / np;
-                let t_mid = grid.theta_centre_deg(it).to_radians();
-                h2[b] / (grid.solid_angle(it) * t_mid.cos().max(1e-6))
-            })
-            .collect();
-        crate::output::slice::write_slice_png(png, (nt, np), &density, 4)?;
+    let tl = &r.tally;
+    TraceReport {
+        grid,
+        albedo: tl.albedo(0),
+        hist2d: tl.hist2d(0),
+        dphi: tl.dphi_hist(0),
+        projected_width_um: r.projected_width_um,
+        launched: tl.launched,
+        intercepted: tl.intercepted,
+        seconds: r.seconds,
+        plain: Some((
+            r.intercepted_width_um(),
+            tl.lost,
+            tl.fallbacks,
+            tl.mean_path_um(),
+        )),
+        bake: None,
     }
-    let (iw, iw_se) = r.intercepted_width_um();
-    if a.json {
-        let rows: Vec<&[f64]> = h2.chunks(grid.n_phi).collect();
-        let rows_se: Vec<&[f64]> = h2_se.chunks(grid.n_phi).collect();
-        let v = json!({
-            "fiber": label,
-            "theta_i_deg": a.theta_i,
-            "phi_i_deg": a.phi_i,
-            "mua_per_um": mua,
-            "albedo": albedo,
-            "albedo_se": albedo_se,
-            "projected_width_um": r.projected_width_um,
-            "intercepted_width_um": iw,
-            "intercepted_width_se_um": iw_se,
-            "photons": t.intercepted,
-            "photons_launched": t.launched,
-            "photons_lost": t.lost,
-            "surface_fallbacks": t.fallbacks,
-            "mean_path_um": t.mean_path_um(),
-            "seconds": r.seconds,
-            "photons_per_s": r.photons_per_s(),
-            "section": {
-                "area_um2": fiber.section.area_um2(),
-                "mean_width_um": fiber.section.mean_width_um(),
-                "holes": fiber.section.hole_count(),
-                "eta": fiber.surface.eta,
-                "beta_deg": fiber.surface.alpha.atan().to_degrees(),
-                "cuticle": fiber.cuticle,
-            },
-            "theta_o_edges_deg": grid.theta_edges_deg(),
-            "dphi_edges_deg": grid.dphi_edges_deg(),
-            "dphi_hist": dh,
-            "dphi_hist_se": dh_se,
-            "hist2d": rows,
-            "hist2d_se": rows_se,
-        });
-        outln!("{v}")?;
-    } else {
+}
+
+/// A spec entry: its bake's estimators, bins and target, with batch-means errors.
+fn trace_with_bake(
+    a: &TraceArgs,
+    t: &TraceTarget,
+    st: &BakeSettings,
+) -> anyhow::Result<TraceReport> {
+    let inc = Incident::from_deg(a.theta_i, a.phi_i);
+    let spinner = (!a.json && a.progress.bar()).then(|| {
+        let s = indicatif::ProgressBar::new_spinner();
+        s.set_message(format!("tracing {} with its bake's settings", t.label));
+        s.enable_steady_tick(std::time::Duration::from_millis(200));
+        s
+    });
+    let cancel = crate::cancel::Cancel::default();
+    let d = crate::bake::fiber::trace_direction(
+        &t.fiber,
+        st,
+        inc,
+        (a.lambda_nm, t.mua_per_um),
+        st.seed,
+        &cancel,
+    )?
+    .map_err(anyhow::Error::from)?;
+    if let Some(s) = spinner {
+        s.finish_and_clear();
+    }
+    let (g, r) = (d.grid, d.result);
+    let dphi = (0..g.n_phi)
+        .map(|j| (0..g.n_theta).map(|i| r.fraction[i * g.n_phi + j]).sum())
+        .collect();
+    Ok(TraceReport {
+        grid: g,
+        albedo: (r.albedo[0], r.albedo_se[0]),
+        hist2d: (r.fraction.clone(), r.density_se.clone()),
+        dphi: (dphi, r.dphi_se.clone()),
+        projected_width_um: d.projected_width_um,
+        launched: r.launched,
+        intercepted: r.intercepted,
+        seconds: r.seconds,
+        plain: None,
+        bake: Some((st.clone(), r.noise, d.reached_target)),
+    })
+}
+
+impl TraceReport {
+    /// Prints the summary or the JSON line, and writes the PNG.
+    fn write(
+        &self,
+        a: &TraceArgs,
+        t: &TraceTarget,
+        png: Option<&std::path::Path>,
+    ) -> anyhow::Result<()> {
+        let (grid, label, mua) = (self.grid, &t.label, t.mua_per_um);
+        let fiber = &t.fiber;
+        let (h2, h2_se) = &self.hist2d;
+        let (albedo, albedo_se) = self.albedo;
+        let photons_per_s = self.launched as f64 / self.seconds.max(1e-9);
+        if let Some(png) = png {
+            // Radiance-like density: fraction per solid angle and cos θo.
+            let (nt, np) = (grid.n_theta, grid.n_phi);
+            let density: Vec<f64> = (0..nt * np)
+                .map(|b| {
+                    let it = b / np;
+                    let t_mid = grid.theta_centre_deg(it).to_radians();
+                    h2[b] / (grid.solid_angle(it) * t_mid.cos().max(1e-6))
+                })
+                .collect();
+            crate::output::slice::write_slice_png(png, (nt, np), &density, 4)?;
+        }
+        if a.json {
+            let rows: Vec<&[f64]> = h2.chunks(grid.n_phi).collect();
+            let rows_se: Vec<&[f64]> = h2_se.chunks(grid.n_phi).collect();
+            let mut v = json!({
+                "fiber": label,
+                "theta_i_deg": a.theta_i,
+                "phi_i_deg": a.phi_i,
+                "mua_per_um": mua,
+                "albedo": albedo,
+                "albedo_se": albedo_se,
+                "projected_width_um": self.projected_width_um,
+                "photons": self.intercepted,
+                "photons_launched": self.launched,
+                "seconds": self.seconds,
+                "photons_per_s": photons_per_s,
+                "estimator": if self.bake.is_some() { "bake" } else { "plain" },
+                "section": {
+                    "area_um2": fiber.section.area_um2(),
+                    "mean_width_um": fiber.section.mean_width_um(),
+                    "holes": fiber.section.hole_count(),
+                    "eta": fiber.surface.eta,
+                    "beta_deg": fiber.surface.alpha.atan().to_degrees(),
+                    "cuticle": fiber.cuticle,
+                },
+                "theta_o_edges_deg": grid.theta_edges_deg(),
+                "dphi_edges_deg": grid.dphi_edges_deg(),
+                "dphi_hist": self.dphi.0,
+                "dphi_hist_se": self.dphi.1,
+                "hist2d": rows,
+                "hist2d_se": rows_se,
+            });
+            if let Some(((iw, iw_se), lost, fallbacks, path)) = self.plain {
+                v["intercepted_width_um"] = json!(iw);
+                v["intercepted_width_se_um"] = json!(iw_se);
+                v["photons_lost"] = json!(lost);
+                v["surface_fallbacks"] = json!(fallbacks);
+                v["mean_path_um"] = json!(path);
+            }
+            if let Some((st, noise, reached)) = &self.bake {
+                v["bake"] = json!({
+                    "resolution_deg": st.res_deg,
+                    "photons_per_direction": st.photons_per_direction(),
+                    "split": st.split,
+                    "exit_draws": st.exit_draws,
+                    "target_rel_se": st.target,
+                    "max_photons_per_direction": st.max_photons,
+                    "batch": st.batch,
+                    "seed": st.seed,
+                });
+                v["noise"] = json!(noise);
+                v["reached_target"] = json!(reached);
+            }
+            outln!("{v}")?;
+            return Ok(());
+        }
         outln!(
             "fiber {label}: θi = {}°, φi = {}°, μa = {mua} /µm",
             a.theta_i,
             a.phi_i
         )?;
         outln!("  albedo            {albedo:.6} ± {albedo_se:.6}")?;
-        outln!(
-            "  projected width   {:.4} µm (exact); intercepted {iw:.4} ± {iw_se:.4} µm",
-            r.projected_width_um
-        )?;
-        outln!(
-            "  photons           {} launched, {} intercepted, {} lost",
-            t.launched,
-            t.intercepted,
-            t.lost
-        )?;
-        outln!("  mean path inside  {:.3} µm", t.mean_path_um())?;
+        match self.plain {
+            Some(((iw, iw_se), lost, _, path)) => {
+                outln!(
+                    "  projected width   {:.4} µm (exact); intercepted {iw:.4} ± {iw_se:.4} µm",
+                    self.projected_width_um
+                )?;
+                outln!(
+                    "  photons           {} launched, {} intercepted, {lost} lost",
+                    self.launched,
+                    self.intercepted
+                )?;
+                outln!("  mean path inside  {path:.3} µm")?;
+            }
+            None => {
+                outln!(
+                    "  projected width   {:.4} µm (exact)",
+                    self.projected_width_um
+                )?;
+                outln!(
+                    "  photons           {} launched, {} intercepted",
+                    self.launched,
+                    self.intercepted
+                )?;
+            }
+        }
+        if let Some((st, noise, reached)) = &self.bake {
+            let target = match (st.target, reached) {
+                (Some(t), Some(true)) => format!(", target {} reached", target_words(t)),
+                (Some(t), _) => format!(
+                    ", target {} not reached at the cap of {} photons",
+                    target_words(t),
+                    st.max_photons
+                ),
+                (None, _) => String::new(),
+            };
+            outln!(
+                "  estimator         the bake's: {}° bins, split {}, exit_draws {}{target}",
+                st.res_deg,
+                st.split,
+                st.exit_draws
+            )?;
+            outln!(
+                "  noise             median relative error {:.2} % over {} bins (thesis: {:.2} %)",
+                100.0 * noise.median_rel_se,
+                noise.bins,
+                100.0 * noise.thesis_rel_se
+            )?;
+        }
         outln!(
             "  throughput        {:.3} M photons/s ({:.2} s)",
-            r.photons_per_s() / 1e6,
-            r.seconds
+            photons_per_s / 1e6,
+            self.seconds
         )?;
         if let Some(png) = png.filter(|_| !a.progress.quiet) {
             outln!("  wrote {}", png.display())?;
         }
+        Ok(())
     }
-    Ok(())
+}
+
+/// A noise target in words.
+fn target_words(t: crate::fiber::slices::NoiseTarget) -> String {
+    match t {
+        crate::fiber::slices::NoiseTarget::Thesis => "thesis".into(),
+        crate::fiber::slices::NoiseTarget::RelSe(x) => format!("{:.2} %", 100.0 * x),
+    }
 }

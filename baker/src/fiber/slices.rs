@@ -116,9 +116,9 @@ impl BakeSettings {
     }
 }
 
-/// What adaptive allocation traces a direction to.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+/// What adaptive allocation traces a direction to. Written (manifest, `fiber trace --json`)
+/// as the spec spells it: `"thesis"` or the number.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum NoiseTarget {
     /// The thesis's noise for this slice: the median over the bins with f̂ ≥ 1 % of the
     /// slice's maximum of √((1 − p_b)/(N·p_b)), the relative standard error plain sampling
@@ -127,6 +127,15 @@ pub enum NoiseTarget {
     Thesis,
     /// A median relative standard error over the same bins.
     RelSe(f64),
+}
+
+impl serde::Serialize for NoiseTarget {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            NoiseTarget::Thesis => s.serialize_str("thesis"),
+            NoiseTarget::RelSe(x) => s.serialize_f64(*x),
+        }
+    }
 }
 
 impl NoiseTarget {
@@ -167,6 +176,9 @@ pub struct SliceResult {
     /// channels, `[θo][Δφ]` (the density whose noise [`Noise`] summarises).
     #[serde(default)]
     pub density_se: Vec<f64>,
+    /// Per Δφ column: standard error (batch means) of the same density summed over θo.
+    #[serde(default)]
+    pub dphi_se: Vec<f64>,
     pub noise: Noise,
     pub launched: u64,
     pub intercepted: u64,
@@ -236,7 +248,7 @@ pub fn trace_slice(
         Some(_) => s.batches_for(s.max_photons).max(first),
         None => first,
     };
-    let mut sums = SliceSums::new(grid.bins(), channels.len(), channels.per_variant());
+    let mut sums = SliceSums::new(grid, channels.len(), channels.per_variant());
     let mut b0 = 0;
     while b0 < cap {
         if b0 >= first && s.target.is_some_and(|t| sums.reached(grid, t)) {
@@ -320,6 +332,8 @@ impl SliceJob<'_> {
 /// Batch scores merged in batch order, with the batch-means sums of the error estimates.
 struct SliceSums {
     bins: usize,
+    /// Δφ columns of the grid.
+    n_phi: usize,
     nch: usize,
     per_variant: usize,
     /// `[bin][channel]`.
@@ -327,6 +341,9 @@ struct SliceSums {
     /// Per bin: Σ and Σ² over batches of the sampling density of variant 0.
     noise_s: Vec<f64>,
     noise_s2: Vec<f64>,
+    /// Per Δφ column: Σ and Σ² over batches of that density summed over θo.
+    dphi_s: Vec<f64>,
+    dphi_s2: Vec<f64>,
     /// Per channel: Σ and Σ² over batches of the albedo.
     alb_s: Vec<f64>,
     alb_s2: Vec<f64>,
@@ -337,14 +354,18 @@ struct SliceSums {
 }
 
 impl SliceSums {
-    fn new(bins: usize, nch: usize, per_variant: usize) -> Self {
+    fn new(grid: &AngularGrid, nch: usize, per_variant: usize) -> Self {
+        let bins = grid.bins();
         Self {
             bins,
+            n_phi: grid.n_phi,
             nch,
             per_variant,
             sum: vec![0.0; bins * nch],
             noise_s: vec![0.0; bins],
             noise_s2: vec![0.0; bins],
+            dphi_s: vec![0.0; grid.n_phi],
+            dphi_s2: vec![0.0; grid.n_phi],
             alb_s: vec![0.0; nch],
             alb_s2: vec![0.0; nch],
             hits: 0,
@@ -368,12 +389,19 @@ impl SliceSums {
         for (a, x) in self.sum.iter_mut().zip(local) {
             *a += x;
         }
-        // Batch means: the sampling density of variant 0 and every channel's albedo.
+        // Batch means: the sampling density of variant 0 (per bin and per Δφ column) and
+        // every channel's albedo.
+        let mut col = vec![0.0; self.n_phi];
         for b in 0..bins {
             let x = local[b * nch..b * nch + per_variant].iter().sum::<f64>()
                 / (per_variant as f64 * hn);
             self.noise_s[b] += x;
             self.noise_s2[b] += x * x;
+            col[b % self.n_phi] += x;
+        }
+        for (j, x) in col.into_iter().enumerate() {
+            self.dphi_s[j] += x;
+            self.dphi_s2[j] += x * x;
         }
         for c in 0..nch {
             let a = (0..bins).map(|b| local[b * nch + c]).sum::<f64>() / hn;
@@ -402,11 +430,15 @@ impl SliceSums {
         let density_se = (0..bins)
             .map(|b| batch_se(self.noise_s[b], self.noise_s2[b], nbf))
             .collect();
+        let dphi_se = (0..self.n_phi)
+            .map(|j| batch_se(self.dphi_s[j], self.dphi_s2[j], nbf))
+            .collect();
         SliceResult {
             fraction,
             albedo,
             albedo_se,
             density_se,
+            dphi_se,
             noise: self.noise(grid, nbf),
             launched,
             intercepted: self.hits,

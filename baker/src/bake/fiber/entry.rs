@@ -536,16 +536,20 @@ fn with_average(eb: &EntryBake, b: usize, res: Vec<bake::SliceResult>) -> Vec<ba
                 .sum::<f64>()
                 / wt;
         }
-        // Variant 0's per-bin error, for rounding the average to its own noise (the
-        // sections are independent traces).
-        for (b, se) in avg.density_se.iter_mut().enumerate() {
-            *se = all
-                .iter()
-                .zip(&w)
-                .map(|(r, w)| (w / wt * r.density_se.get(b).copied().unwrap_or(0.0)).powi(2))
-                .sum::<f64>()
-                .sqrt();
-        }
+        // Variant 0's per-bin and per-Δφ errors, for rounding the average to its own noise
+        // (the sections are independent traces).
+        let combined = |se: fn(&bake::SliceResult) -> &Vec<f64>, n: usize| -> Vec<f64> {
+            (0..n)
+                .map(|b| {
+                    (all.iter().zip(&w))
+                        .map(|(r, w)| (w / wt * se(r).get(b).copied().unwrap_or(0.0)).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect()
+        };
+        avg.density_se = combined(|r| &r.density_se, avg.density_se.len());
+        avg.dphi_se = combined(|r| &r.dphi_se, avg.dphi_se.len());
         for c in 0..avg.albedo.len() {
             avg.albedo[c] = avg.fraction[c * bins..(c + 1) * bins].iter().sum();
             avg.albedo_se[c] = all

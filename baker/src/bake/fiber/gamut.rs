@@ -181,6 +181,7 @@ mod tests {
             albedo_se: albedo.iter().map(|a| 0.01 * a).collect(),
             albedo,
             density_se: vec![0.001; bins],
+            dphi_se: vec![],
             noise: Noise::default(),
             launched: 1,
             intercepted: 1,

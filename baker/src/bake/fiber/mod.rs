@@ -14,9 +14,12 @@
 mod entry;
 mod gamut;
 mod preview;
+mod probe;
 mod setup;
 mod tables;
 pub mod thesis;
+
+pub use probe::{trace_direction, DirectionTrace};
 
 use std::time::Instant;
 

@@ -296,6 +296,7 @@ mod tests {
             albedo: vec![0.7, 1.3, 36.0, 36.0],
             albedo_se: vec![0.0; 4],
             density_se: vec![0.04, 0.01, 0.0, 0.02],
+            dphi_se: vec![],
             noise: Noise::default(),
             launched: 1,
             intercepted: 1,
@@ -310,6 +311,7 @@ mod tests {
         assert!(noise_tolerance(&r, 2, bins, 0.0).is_none());
         let old = SliceResult {
             density_se: vec![],
+            dphi_se: vec![],
             ..r
         };
         assert!(noise_tolerance(&old, 2, bins, 0.25).is_none());
