@@ -274,3 +274,50 @@ fibers:
         cc / kc as f64
     );
 }
+
+/// The albedo errors a bake's tables store are the estimator's own: two bakes with different
+/// seeds differ by what `albedo_se` claims, per stored direction and dyed channel. Four
+/// batches per direction give each error 3 degrees of freedom, so (a − b)²/(σa² + σb²) is
+/// not χ²₁ (its mean is 1.5 and its tail heavy); the test compares the relative variances
+/// instead, Σ(a − b)²/m² against Σ(σa² + σb²)/m² (m the mean of a and b), whose ratio is 1
+/// when σ² is unbiased (measured 1.11 over 1,080 values; σ off by 25 % gives 1.97 or 0.71).
+/// Spectral, so no gamut mapping touches the errors; `split` and
+/// `exit_draws` on, so per-photon errors would be wrong.
+#[test]
+fn issue18_table_albedo_errors_match_two_seeds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bake = |seed: u32| {
+        let yaml = spec(
+            ", channels: spectral, lambda_nm: {start: 450, end: 650, step: 50}, split: 2, exit_draws: 4",
+        )
+        .replace("resolution_deg: 15", "resolution_deg: 30")
+        .replace("photons_per_direction: 4096", "photons_per_direction: 16384")
+        .replace("seed: 7", &format!("seed: {seed}"));
+        common::bake_spec(tmp.path(), &format!("s{seed}"), &yaml, 2)
+    };
+    let (a, b) = (bake(7), bake(8));
+    let (mut diff, mut claim, mut k) = (0.0, 0.0, 0usize);
+    for t in ["section-00", "section-01"] {
+        let ta = Bcsdf::open(a.join(format!("silk/{t}.bcsdf"))).unwrap();
+        let tb = Bcsdf::open(b.join(format!("silk/{t}.bcsdf"))).unwrap();
+        for i in 0..ta.dir.albedo.len() {
+            let (x, y) = (f64::from(ta.dir.albedo[i]), f64::from(tb.dir.albedo[i]));
+            let (sx, sy) = (
+                f64::from(ta.dir.albedo_se[i]),
+                f64::from(tb.dir.albedo_se[i]),
+            );
+            let m2 = (0.5 * (x + y)).powi(2);
+            if sx > 0.0 && sy > 0.0 {
+                diff += (x - y).powi(2) / m2;
+                claim += (sx * sx + sy * sy) / m2;
+                k += 1;
+            }
+        }
+    }
+    let r = diff / claim;
+    assert!(k > 100, "{k} dyed values");
+    assert!(
+        (0.7..1.4).contains(&r),
+        "variance ratio {r} over {k} values"
+    );
+}
