@@ -654,8 +654,7 @@ impl TraceReport {
         png: Option<&std::path::Path>,
     ) -> anyhow::Result<()> {
         let (grid, label, mua) = (self.grid, &t.label, t.mua_per_um);
-        let fiber = &t.fiber;
-        let (h2, h2_se) = &self.hist2d;
+        let h2 = &self.hist2d.0;
         let (albedo, albedo_se) = self.albedo;
         let photons_per_s = self.launched as f64 / self.seconds.max(1e-9);
         if let Some(png) = png {
@@ -671,59 +670,7 @@ impl TraceReport {
             crate::output::slice::write_slice_png(png, (nt, np), &density, 4)?;
         }
         if a.json {
-            let rows: Vec<&[f64]> = h2.chunks(grid.n_phi).collect();
-            let rows_se: Vec<&[f64]> = h2_se.chunks(grid.n_phi).collect();
-            let mut v = json!({
-                "fiber": label,
-                "theta_i_deg": a.theta_i,
-                "phi_i_deg": a.phi_i,
-                "mua_per_um": mua,
-                "albedo": albedo,
-                "albedo_se": albedo_se,
-                "projected_width_um": self.projected_width_um,
-                "photons": self.intercepted,
-                "photons_launched": self.launched,
-                "seconds": self.seconds,
-                "photons_per_s": photons_per_s,
-                "estimator": if self.bake.is_some() { "bake" } else { "plain" },
-                "section": {
-                    "area_um2": fiber.section.area_um2(),
-                    "mean_width_um": fiber.section.mean_width_um(),
-                    "holes": fiber.section.hole_count(),
-                    "eta": fiber.surface.eta,
-                    "beta_deg": fiber.surface.alpha.atan().to_degrees(),
-                    "cuticle": fiber.cuticle,
-                },
-                "theta_o_edges_deg": grid.theta_edges_deg(),
-                "dphi_edges_deg": grid.dphi_edges_deg(),
-                "dphi_hist": self.dphi.0,
-                "dphi_hist_se": self.dphi.1,
-                "hist2d": rows,
-                "hist2d_se": rows_se,
-            });
-            if let Some(((iw, iw_se), lost, fallbacks, path)) = self.plain {
-                v["intercepted_width_um"] = json!(iw);
-                v["intercepted_width_se_um"] = json!(iw_se);
-                v["photons_lost"] = json!(lost);
-                v["surface_fallbacks"] = json!(fallbacks);
-                v["mean_path_um"] = json!(path);
-            }
-            if let Some((st, noise, reached)) = &self.bake {
-                v["bake"] = json!({
-                    "resolution_deg": st.res_deg,
-                    "photons_per_direction": st.photons_per_direction(),
-                    "split": st.split,
-                    "exit_draws": st.exit_draws,
-                    "target_rel_se": st.target,
-                    "max_photons_per_direction": st.max_photons,
-                    "batch": st.batch,
-                    "seed": st.seed,
-                });
-                v["noise"] = json!(noise);
-                v["reached_target"] = json!(reached);
-            }
-            outln!("{v}")?;
-            return Ok(());
+            return self.write_json(a, t);
         }
         outln!(
             "fiber {label}: θi = {}°, φi = {}°, μa = {mua} /µm",
@@ -787,6 +734,68 @@ impl TraceReport {
         if let Some(png) = png.filter(|_| !a.progress.quiet) {
             outln!("  wrote {}", png.display())?;
         }
+        Ok(())
+    }
+
+    /// Prints the trace as one JSON line (`--json`).
+    fn write_json(&self, a: &TraceArgs, t: &TraceTarget) -> anyhow::Result<()> {
+        let (grid, label, mua) = (self.grid, &t.label, t.mua_per_um);
+        let fiber = &t.fiber;
+        let (h2, h2_se) = &self.hist2d;
+        let (albedo, albedo_se) = self.albedo;
+        let photons_per_s = self.launched as f64 / self.seconds.max(1e-9);
+        let rows: Vec<&[f64]> = h2.chunks(grid.n_phi).collect();
+        let rows_se: Vec<&[f64]> = h2_se.chunks(grid.n_phi).collect();
+        let mut v = json!({
+            "fiber": label,
+            "theta_i_deg": a.theta_i,
+            "phi_i_deg": a.phi_i,
+            "mua_per_um": mua,
+            "albedo": albedo,
+            "albedo_se": albedo_se,
+            "projected_width_um": self.projected_width_um,
+            "photons": self.intercepted,
+            "photons_launched": self.launched,
+            "seconds": self.seconds,
+            "photons_per_s": photons_per_s,
+            "estimator": if self.bake.is_some() { "bake" } else { "plain" },
+            "section": {
+                "area_um2": fiber.section.area_um2(),
+                "mean_width_um": fiber.section.mean_width_um(),
+                "holes": fiber.section.hole_count(),
+                "eta": fiber.surface.eta,
+                "beta_deg": fiber.surface.alpha.atan().to_degrees(),
+                "cuticle": fiber.cuticle,
+            },
+            "theta_o_edges_deg": grid.theta_edges_deg(),
+            "dphi_edges_deg": grid.dphi_edges_deg(),
+            "dphi_hist": self.dphi.0,
+            "dphi_hist_se": self.dphi.1,
+            "hist2d": rows,
+            "hist2d_se": rows_se,
+        });
+        if let Some(((iw, iw_se), lost, fallbacks, path)) = self.plain {
+            v["intercepted_width_um"] = json!(iw);
+            v["intercepted_width_se_um"] = json!(iw_se);
+            v["photons_lost"] = json!(lost);
+            v["surface_fallbacks"] = json!(fallbacks);
+            v["mean_path_um"] = json!(path);
+        }
+        if let Some((st, noise, reached)) = &self.bake {
+            v["bake"] = json!({
+                "resolution_deg": st.res_deg,
+                "photons_per_direction": st.photons_per_direction(),
+                "split": st.split,
+                "exit_draws": st.exit_draws,
+                "target_rel_se": st.target,
+                "max_photons_per_direction": st.max_photons,
+                "batch": st.batch,
+                "seed": st.seed,
+            });
+            v["noise"] = json!(noise);
+            v["reached_target"] = json!(reached);
+        }
+        outln!("{v}")?;
         Ok(())
     }
 }
