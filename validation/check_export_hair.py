@@ -9,7 +9,7 @@ What it does:
   1. bakes two tiny fiber tables (a dyed round polyester fiber and a wool fiber with cuticle
      scales, 10 deg bins, 4096 photons per stored direction: a few seconds) with `baker bake`;
      every step below runs for both;
-  2. exports it with `baker export TABLE --to chiang|mitsuba|pbrt|blender -o FILE`, and checks
+  2. exports it with `baker export TABLE --to chiang|mitsuba|pbrt|blender|mtlx -o FILE`, and checks
      that an unknown target or variant is a usage error (exit code 2);
   3. loads the Mitsuba XML with the `mitsuba` package (variant scalar_rgb) inside a scene that
      `<include>`s it, and checks that the plugin holds the parameters of the chiang JSON
@@ -39,10 +39,12 @@ What it does:
   7. renders a 16 x 16 image of a hair-BSDF `bsplinecurve` under a constant emitter (the
      XML works in a scene);
   8. checks that the pbrt-v4 snippet and the Blender script carry the same parameters (pbrt:
-     the same numbers; Blender: Offset = -alpha in radians, see baker/src/export/fiber/blender.rs).
+     the same numbers; Blender: Offset = -alpha in radians, see baker/src/export/fiber/blender.rs);
+  9. validates the MaterialX chiang_hair_bsdf document with the MaterialX package
+     (loadLibraries, validate) and checks its inputs in MaterialX's units (check_mtlx_hair).
 
 Exits 1 on any failure. Prints the largest relative differences, the fit errors and their
-bound, and the tilt shifts. About 20 s on 2 cores (bake 3 s, 4 exports per table, each a fit).
+bound, and the tilt shifts. About 25 s on 2 cores (bake 3 s, 5 exports per table, each a fit).
 
 The fit error. The JSON's `fit.rel_l1` is sum |model - table| dOmega / sum |table| dOmega over
 the fit's bins, theta_i and channels; `fit.noise_l1_estimate` (baker/src/export/chiang/
@@ -382,7 +384,7 @@ def check_table(mi, baker, table, tmp, name):
     tmp.mkdir(parents=True, exist_ok=True)
     files = {}
     for target, ext in [("chiang", "json"), ("mitsuba", "xml"), ("pbrt", "pbrt"),
-                        ("blender", "py")]:
+                        ("blender", "py"), ("mtlx", "mtlx")]:
         files[target] = tmp / f"{name}_hair.{ext}"
         p = run([baker, "export", table, "--to", target, "-o", files[target]])
         print(f"export --to {target}: {p.stderr.strip()}")
@@ -558,7 +560,62 @@ def check_table(mi, baker, table, tmp, name):
     if np.max(np.abs(np.array(ns["SIGMA_A"]) - wb["Absorption Coefficient"])) > 1e-5 * max(1, max(wb["Absorption Coefficient"])):
         failures.append(f"blender SIGMA_A {ns['SIGMA_A']}")
 
+    failures += check_mtlx_hair(files["mtlx"], par)
     return failures
+
+
+def check_mtlx_hair(path, par):
+    """The MaterialX chiang_hair_bsdf: valid against the installed MaterialX standard library
+    (mx.loadLibraries, doc.validate()), one BSDF, and the fit in MaterialX's units: roughness
+    (v, s) = Mitsuba hair.cpp's v = (0.726 b_m + 0.812 b_m^2 + 3.7 b_m^20)^2 (x 1, 1/4, 4) and
+    s_hair.cpp / sqrt(pi/8) (mx_chiang_hair_bsdf.glsl multiplies s by 0.626657 itself),
+    absorption = sigma_a, ior = eta, cuticle_angle pi - pi/2 = -alpha (the shader's tilt,
+    mx_hair_alpha_angles; Cycles' sign, see baker/src/export/fiber/mtlx.rs)."""
+    import MaterialX as mx
+    fails = []
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(path))
+    lib = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+    doc.importLibrary(lib)
+    ok, msg = doc.validate()
+    if not ok:
+        fails.append(f"mtlx: MaterialX {mx.getVersionString()} validate(): {msg}")
+    nodes = [n for n in doc.getNodes() if n.getCategory() == "chiang_hair_bsdf"]
+    mats = [n for n in doc.getNodes() if n.getCategory() == "surfacematerial"]
+    if len(nodes) != 1 or len(mats) != 1:
+        return fails + [f"mtlx: {len(nodes)} chiang_hair_bsdf, {len(mats)} materials"]
+    nd = nodes[0].getNodeDef()
+    if nd is None or nd.getName() != "ND_chiang_hair_bsdf":
+        fails.append(f"mtlx: nodedef {nd and nd.getName()}")
+
+    def val(name):
+        i = nodes[0].getInput(name)
+        return None if i is None else [float(x) for x in i.getValueString().split(",")]
+
+    bm, bn = par["beta_m"], par["beta_n"]
+    v = (0.726 * bm + 0.812 * bm ** 2 + 3.7 * bm ** 20) ** 2
+    s_hair = math.sqrt(math.pi / 8) * (0.265 * bn + 1.194 * bn ** 2 + 5.372 * bn ** 22)
+    want = {"roughness_R": [v, s_hair / 0.626657], "roughness_TT": [v / 4, s_hair / 0.626657],
+            "roughness_TRT": [4 * v, s_hair / 0.626657], "ior": [par["eta"]],
+            "absorption_coefficient": par["sigma_a"], "tint_R": [1, 1, 1], "tint_TT": [1, 1, 1],
+            "tint_TRT": [1, 1, 1]}
+    worst = 0.0
+    for k, w in want.items():
+        g = val(k)
+        if g is None or len(g) != len(w):
+            fails.append(f"mtlx {k}: {g} vs {w}")
+            continue
+        dev = max(abs(a - b) / max(1e-3, abs(b)) for a, b in zip(g, w))
+        worst = max(worst, dev)
+        if dev > 2e-4:
+            fails.append(f"mtlx {k}: {g} vs {w}")
+    tilt = val("cuticle_angle")[0] * math.pi - math.pi / 2
+    if abs(tilt + math.radians(par["alpha_deg"])) > 1e-5:
+        fails.append(f"mtlx cuticle_angle: tilt {math.degrees(tilt):.4f} deg, alpha {par['alpha_deg']}")
+    print(f"mtlx: validates ({mx.getVersionString()}), chiang_hair_bsdf inputs = the fit in "
+          f"MaterialX's units to {worst:.1e} relative; tilt {math.degrees(tilt):.4f} deg = -alpha")
+    return fails
 
 
 def check_tilt(name, par, tab, mi_far):

@@ -30,9 +30,19 @@ Checks (one PASS/FAIL line each, with the worst discrepancy):
            uniform white light, orthographic 16x16 px) and renders finite, non-black pixels;
            and per channel, a cube of that channel's (grey) medium seen head-on with volpath
            shows A within 4 standard errors + 1 % (first, middle and last entry)
-  unreal   every SubsurfaceProfile field present and positive; Unreal's own conversion
-           (MFP cm -> DMFP mm -> d = DMFP/(3.5 + 100 (A-0.33)^4)) gives back the Burley d
-  unity    every HDRP field present and positive; scatteringDistance x multiplier = d (mm)
+  unreal   (the JSON side file) every SubsurfaceProfile field present and positive; Unreal's
+           own conversion (MFP cm -> DMFP mm -> d = DMFP/(3.5 + 100 (A-0.33)^4)) gives back d
+  unreal.py  the editor script parses (ast) and, run twice against a stand-in `unreal` module
+           that accepts only the names of validation/engine_reference/unreal_python_api.json,
+           creates one SubsurfaceProfile per entry, then updates the same assets (no new
+           ones); every field set equals the JSON side file, within Unreal's clamps
+  unity    (profiles.json) every HDRP field present and positive; colour x multiplier = d (mm)
+  unity.asset  every .asset parses as Unity YAML (ruamel.yaml) with the header, m_Script GUID,
+           m_Version and exactly the profile fields of validation/engine_reference/
+           hdrp_diffusion_profile.json, values within its ranges and equal to profiles.json
+           (single precision); every .meta has a unique 32-hex GUID = profiles.json's
+  stderr   every export prints the Burley fit line; its worst error per channel = the max of
+           the Burley JSON's fit errors
   blender  the script compiles (Blender is not needed) and, run against a stand-in `bpy`,
            sets Subsurface Radius = 4 pi d, Base Color = A/(1 - F0), method BURLEY
   pbrt     one MakeNamedMaterial "subsurface" per entry; mfp and reflectance as mtlx
@@ -62,8 +72,9 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # validation/bkt.py
 from bkt import read_bkt  # noqa: E402
 
-TARGETS = {"burley": "json", "mtlx": "mtlx", "blender": "py", "unreal": "unreal.json",
-           "unity": "unity.json", "pbrt": "pbrt", "mitsuba": "xml"}
+TARGETS = {"burley": "json", "mtlx": "mtlx", "blender": "py", "unreal": "unreal.py",
+           "unity": "unity", "pbrt": "pbrt", "mitsuba": "xml"}
+ENGINE_REF = Path(__file__).resolve().parent / "engine_reference"
 TOL_ERR, TOL_REL, TOL_PRINT = 1e-9, 1e-5, 2e-6
 SHOW = 6
 
@@ -383,9 +394,18 @@ def check_unity(doc, fits):
 
 
 class _Socket:
-    def __init__(self):
+    def __init__(self, name=""):
+        self.name = name
         self.default_value = None
         self.is_linked = False
+
+
+class _Sockets(dict):
+    """node.inputs: by name (`inputs["IOR"]`, `"IOR" in inputs`); iterates over the sockets,
+    as bpy's collections do."""
+
+    def __iter__(self):
+        return iter(list(self.values()))
 
 
 class _Node:
@@ -393,9 +413,9 @@ class _Node:
         self.type = type_
         self.subsurface_method = "RANDOM_WALK"
         names = ["Base Color", "Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "IOR",
-                 "Surface"]
-        self.inputs = {n: _Socket() for n in names}
-        self.outputs = {"BSDF": _Socket()}
+                 "Subsurface IOR", "Subsurface Anisotropy", "Surface"]
+        self.inputs = _Sockets({n: _Socket(n) for n in names})
+        self.outputs = _Sockets({"BSDF": _Socket("BSDF")})
 
 
 class _Nodes(list):
@@ -428,6 +448,7 @@ def check_blender(path, fits):
     compile(src, str(path), "exec")
     bpy = types.ModuleType("bpy")
     bpy.data = types.SimpleNamespace(materials=_Materials())
+    bpy.app = types.SimpleNamespace(version=(5, 0, 1))  # the version CI's bpy venv holds
     bpy.context = types.SimpleNamespace(
         scene=types.SimpleNamespace(unit_settings=types.SimpleNamespace(scale_length=1.0)))
     saved = sys.modules.get("bpy")
@@ -483,6 +504,256 @@ def check_pbrt(path, fits):
 
 
 # ---------------------------------------------------------------------------------------------
+# Engines that cannot run here: Unreal's script against a stand-in API, Unity's YAML against
+# HDRP's serialisation (validation/engine_reference/).
+
+
+def fake_unreal(api, store, log):
+    """A stand-in `unreal` module: the names of unreal_python_api.json and nothing else.
+    `store` maps asset paths to SubsurfaceProfile objects (the 'content browser')."""
+    struct_props = api["SubsurfaceProfileStruct"]["editor_properties"]
+    types_ = {"float": (float, int), "bool": (bool,), "LinearColor": (None,)}
+
+    class LinearColor:
+        def __init__(self, r, g, b, a):
+            self.rgba = (float(r), float(g), float(b), float(a))
+
+    types_["LinearColor"] = (LinearColor,)
+
+    class Props:
+        allowed: dict = {}
+
+        def __init__(self):
+            self.values = {}
+
+        def get_editor_property(self, name):
+            if name not in self.allowed:
+                raise AttributeError(f"{type(self).__name__} has no editor property {name!r}")
+            return self.values.get(name)
+
+        def set_editor_property(self, name, value):
+            if name not in self.allowed:
+                raise AttributeError(f"{type(self).__name__} has no editor property {name!r}")
+            want = self.allowed[name]
+            ok = isinstance(value, types_[want]) if want in types_ else isinstance(value, globals_[want])
+            if want == "float" and isinstance(value, bool):
+                ok = False
+            if not ok:
+                raise TypeError(f"{name}: {want} expected, got {type(value).__name__}")
+            self.values[name] = value
+
+    class SubsurfaceProfileStruct(Props):
+        allowed = struct_props
+
+    class SubsurfaceProfile(Props):
+        allowed = api["SubsurfaceProfile"]["editor_properties"]
+
+        def __init__(self, path):
+            super().__init__()
+            self.path = path
+            self.values["settings"] = SubsurfaceProfileStruct()
+
+        def get_editor_property(self, name):
+            v = super().get_editor_property(name)
+            copy = SubsurfaceProfileStruct()  # Unreal returns a copy of a struct property
+            copy.values = dict(v.values)
+            return copy
+
+        def get_path_name(self):
+            return self.path
+
+    globals_ = {"SubsurfaceProfileStruct": SubsurfaceProfileStruct}
+
+    class SubsurfaceProfileFactory:
+        pass
+
+    class AssetTools:
+        def create_asset(self, asset_name, package_path, asset_class, factory):
+            if asset_class is not SubsurfaceProfile or not isinstance(factory, SubsurfaceProfileFactory):
+                raise TypeError("create_asset: SubsurfaceProfile with its factory expected")
+            path = package_path + "/" + asset_name
+            if path in store:
+                raise RuntimeError(f"{path} exists")
+            store[path] = SubsurfaceProfile(path)
+            log.append(("create", path))
+            return store[path]
+
+    class AssetToolsHelpers:
+        @staticmethod
+        def get_asset_tools():
+            return AssetTools()
+
+    class EditorAssetLibrary:
+        @staticmethod
+        def does_asset_exist(asset_path):
+            return asset_path in store
+
+        @staticmethod
+        def load_asset(asset_path):
+            log.append(("load", asset_path))
+            return store.get(asset_path)
+
+        @staticmethod
+        def save_loaded_asset(asset_to_save, only_if_is_dirty=True):
+            log.append(("save", asset_to_save.path))
+            return True
+
+    m = types.ModuleType("unreal")
+    for obj in (LinearColor, SubsurfaceProfileStruct, SubsurfaceProfile, SubsurfaceProfileFactory,
+                AssetToolsHelpers, EditorAssetLibrary):
+        setattr(m, obj.__name__, obj)
+    m.log = lambda arg: log.append(("log", arg))
+    return m
+
+
+def check_unreal_script(script, doc):
+    import ast
+    api = json.loads((ENGINE_REF / "unreal_python_api.json").read_text())
+    clamps = api["SubsurfaceProfileStruct"]["clamps_SubsurfaceProfile_h_UE54"]
+    src = script.read_text()
+    ast.parse(src)
+    bad, store, log = [], {}, []
+    code = compile(src, str(script), "exec")
+    saved = sys.modules.get("unreal")
+    try:
+        sys.modules["unreal"] = fake_unreal(api, store, log)
+        for _ in range(2):  # the second run must update the assets of the first
+            exec(code, {"__name__": "__main__"})
+    finally:
+        if saved is None:
+            sys.modules.pop("unreal", None)
+        else:
+            sys.modules["unreal"] = saved
+    n = len(doc["profiles"])
+    creates = [x for x in log if x[0] == "create"]
+    loads = [x for x in log if x[0] == "load"]
+    saves = [x for x in log if x[0] == "save"]
+    if len(creates) != n or len(loads) != n or len(saves) != 2 * n or len(store) != n:
+        bad.append(f"{n} profiles: {len(creates)} created, {len(loads)} reloaded, {len(saves)} saves")
+    worst = 0.0
+    for p in doc["profiles"]:
+        path = "/Game/BakerSkin/" + p["asset"]
+        a = store.get(path)
+        if a is None:
+            bad.append(f"{p['name']}: no asset {path}")
+            continue
+        got = a.values["settings"].values
+        sp = p["SubsurfaceProfile"]
+        want = {"surface_albedo": [sp["SurfaceAlbedo"][k] for k in "RGB"],
+                "mean_free_path_color": [sp["MeanFreePathColor"][k] for k in "RGB"],
+                "mean_free_path_distance": sp["MeanFreePathDistance"],
+                "world_unit_scale": sp["WorldUnitScale"], "ior": sp["IOR"],
+                "enable_burley": True, "enable_mean_free_path": True}
+        for k, w in want.items():
+            g = got.get(k)
+            if g is None:
+                bad.append(f"{p['name']}: {k} not set")
+                continue
+            g = list(g.rgba[:3]) if hasattr(g, "rgba") else g
+            if isinstance(w, bool):
+                if g is not w:
+                    bad.append(f"{p['name']}: {k} = {g}")
+                continue
+            dev = float(np.max(np.abs(np.asarray(g, float) - np.asarray(w, float))))
+            worst = max(worst, dev)
+            if dev != 0.0:
+                bad.append(f"{p['name']}: {k} = {g}, JSON {w}")
+            lo, hi = clamps.get(k, (-np.inf, np.inf))
+            if k == "surface_albedo":
+                lo = 0.0  # below 0.01 Unreal clamps (noted in the JSON), not an error
+            if np.any(np.asarray(g, float) < lo) or np.any(np.asarray(g, float) > hi):
+                bad.append(f"{p['name']}: {k} = {g} outside Unreal's clamp [{lo}, {hi}]")
+    return (f"{n} assets created, rerun updated them in place; fields = JSON to {worst:.0e}, "
+            f"names of the UE Python API"), bad
+
+
+def check_unity_assets(folder, doc):
+    from ruamel.yaml import YAML
+    ref = json.loads((ENGINE_REF / "hdrp_diffusion_profile.json").read_text())
+    yaml = YAML(typ="safe", pure=True)
+    header = "%YAML 1.1\n%TAG !u! tag:unity3d.com,2011:\n--- !u!114 &11400000\n"
+    bad, guids, worst = [], set(), 0.0
+    listed = set(doc["files"])
+    present = {p.name for p in folder.iterdir()}
+    if present != listed:
+        bad.append(f"folder holds {sorted(present ^ listed)[:4]} not matching profiles.json")
+    rng = ref["ranges"]
+    for p in doc["profiles"]:
+        text = (folder / p["asset"]).read_text()
+        if not text.startswith(header):
+            bad.append(f"{p['asset']}: header {text[:60]!r}")
+            continue
+        mb = yaml.load(text[len(header):])["MonoBehaviour"]
+        if mb["m_Script"] != ref["m_Script"] or mb["m_Version"] != ref["m_Version"]:
+            bad.append(f"{p['asset']}: m_Script {mb['m_Script']}, m_Version {mb['m_Version']}")
+        if mb["m_Name"] != p["name"]:
+            bad.append(f"{p['asset']}: m_Name {mb['m_Name']!r}")
+        prof = mb["profile"]
+        if list(prof) != ref["profile_fields"]:
+            bad.append(f"{p['asset']}: fields {list(prof)}")
+            continue
+        dp = p["DiffusionProfile"]
+        sd = [prof["scatteringDistance"][k] for k in "rgb"]
+        want = [dp["scatteringDistance"][k] for k in "rgb"]
+        f32 = lambda x: float(np.float32(x))  # noqa: E731
+        dev = max(abs(f32(a) - f32(b)) for a, b in zip(sd + [prof["scatteringDistanceMultiplier"], prof["ior"]],
+                                                   want + [dp["scatteringDistanceMultiplier"], dp["ior"]]))
+        worst = max(worst, dev)
+        if dev > 0:
+            bad.append(f"{p['asset']}: values differ from profiles.json by {dev:.1e}")
+        ok = (all(0 <= x <= 1 for x in sd) and prof["scatteringDistanceMultiplier"] > 0
+              and rng["ior"][0] <= prof["ior"] <= rng["ior"][1]
+              and prof["worldScale"] >= rng["worldScale"][0]
+              and rng["lobeMix"][0] <= prof["lobeMix"] <= rng["lobeMix"][1]
+              and rng["diffuseShadingPower"][0] <= prof["diffuseShadingPower"] <= rng["diffuseShadingPower"][1]
+              and all(rng["smoothnessMultipliers"][0] <= v <= rng["smoothnessMultipliers"][1]
+                      for v in prof["smoothnessMultipliers"].values())
+              and prof["texturingMode"] in rng["texturingMode"].values()
+              and prof["transmissionMode"] in rng["transmissionMode"].values()
+              and 0 <= prof["thicknessRemap"]["x"] <= prof["thicknessRemap"]["y"])
+        if not ok:
+            bad.append(f"{p['asset']}: outside HDRP's ranges: {prof}")
+        meta = yaml.load((folder / (p["asset"] + ".meta")).read_text())
+        g = str(meta["guid"])
+        if not (re.fullmatch(r"[0-9a-f]{32}", g) and g == p["guid"] and g not in guids
+                and meta["NativeFormatImporter"]["mainObjectFileID"] == ref["meta"]["mainObjectFileID"]):
+            bad.append(f"{p['asset']}.meta: guid {g!r}, {meta}")
+        guids.add(g)
+    return (f"{len(doc['profiles'])} .asset + .meta parse as HDRP serialises them; values = "
+            f"profiles.json to {worst:.0e}; {len(guids)} distinct GUIDs"), bad
+
+
+def check_stderr(stderr, burley):
+    errs = np.array([e["burley_error_rgb"] for e in burley["entries"]], float)
+    worst = errs.max(axis=0)
+    bad = []
+    for t, text in stderr.items():
+        m = re.search(r"Burley fit of (\d+) entr.*R ([0-9.]+) .*G ([0-9.]+) .*B ([0-9.]+) ", text)
+        if not m:
+            bad.append(f"--to {t}: no fit line on stderr: {text[:200]!r}")
+            continue
+        got = np.array([float(m.group(i)) for i in (2, 3, 4)])
+        if int(m.group(1)) != len(errs) or np.any(np.abs(got - worst) > 5e-5):
+            bad.append(f"--to {t}: {m.group(0)!r}, worst {worst}")
+    return f"{len(stderr)} targets print the fit line (worst R G B {np.round(worst, 4)})", bad
+
+
+def rerun_unity(baker, table, folder):
+    """A re-export replaces the folder in place (same GUIDs); a stranger in it stops it."""
+    before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    cmd = [str(baker), "export", str(table), "--to", "unity", "-o", str(folder), "-q"]
+    subprocess.run(cmd, check=True, timeout=600)
+    after = {p.name: p.read_bytes() for p in folder.iterdir()}
+    bad = [] if after == before else ["a re-export changed the folder"]
+    (folder / "notes.txt").write_text("mine")
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    if p.returncode == 0 or "notes.txt" not in p.stderr or not (folder / "notes.txt").exists():
+        bad.append(f"a folder with a file of the user's was replaced: {p.returncode} {p.stderr[-300:]}")
+    (folder / "notes.txt").unlink()
+    return "re-export identical; a user's file in the folder stops it", bad
+
+
+# ---------------------------------------------------------------------------------------------
 
 
 def build_baker() -> Path:
@@ -522,15 +793,17 @@ def main() -> int:
         kind, meta, tab = read_bkt(str(table))
         names = json.loads(meta["entries"])
 
-        files = {}
+        files, stderr = {}, {}
         for t, ext in TARGETS.items():
             out = work / f"skin.{ext}"
             cmd = [str(baker), "export", str(table), "--to", t, "-o", str(out)]
+            if t == "blender":  # the Christensen-Burley method this check recomputes
+                cmd += ["--method", "burley"]
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
             if p.returncode != 0:
                 print(f"FAIL export --to {t}: exit {p.returncode}: {p.stderr.strip()[-2000:]}")
                 return 1
-            files[t] = out
+            files[t], stderr[t] = out, p.stderr
 
         results = []
 
@@ -552,8 +825,13 @@ def main() -> int:
         run("burley", check_burley, burley, tab, names)
         run("mtlx", check_mtlx, files["mtlx"], fits)
         run("mitsuba", check_mitsuba, files["mitsuba"], fits, work)
-        run("unreal", check_unreal, json.loads(files["unreal"].read_text()), fits)
-        run("unity", check_unity, json.loads(files["unity"].read_text()), fits)
+        unreal_json = json.loads(files["unreal"].with_suffix(".json").read_text())
+        unity_json = json.loads((files["unity"] / "profiles.json").read_text())
+        run("unreal", check_unreal, unreal_json, fits)
+        run("unreal.py", check_unreal_script, files["unreal"], unreal_json)
+        run("unity", check_unity, unity_json, fits)
+        run("unity.asset", check_unity_assets, files["unity"], unity_json)
+        run("stderr", check_stderr, stderr, burley)
         run("blender", check_blender, files["blender"], fits)
         run("pbrt", check_pbrt, files["pbrt"], fits)
 
@@ -564,6 +842,7 @@ def main() -> int:
             return "mtlx on stdout = -o file", [] if same else ["stdout differs from -o FILE"]
 
         run("stdout", same_on_stdout)
+        run("unity.rerun", rerun_unity, baker, table, files["unity"])
         passed = sum(results)
         print(f"check_export_skin: {passed} passed, {len(results) - passed} failed")
         return 0 if all(results) else 1

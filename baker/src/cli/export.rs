@@ -1,9 +1,7 @@
 //! `baker export TABLE --to FORMAT [--entry NAME] [-o FILE]`.
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
 use clap::Args;
 
 use crate::error::UsageError;
@@ -15,14 +13,20 @@ pub struct ExportArgs {
     /// A baked table: `out/<spec>/profiles.bkt` (skin) or `out/fibers/<entry>/*.bcsdf` (fiber).
     pub table: PathBuf,
     /// Target. Skin: burley, mtlx (OpenPBR/MaterialX), blender, unreal, unity, pbrt, mitsuba.
-    /// Fiber: chiang, pbrt, mitsuba, blender.
+    /// Fiber: chiang, pbrt, mitsuba, blender, mtlx. `unreal` writes an editor script and, with
+    /// `-o X.py`, `X.json` beside it; `unity` writes a folder of assets (`-o DIR`).
     #[arg(long = "to")]
     pub to: String,
     /// Skin entry to export (repeatable; default: every entry) or fiber dye variant (one;
     /// default: the first).
     #[arg(long = "entry", value_name = "NAME")]
     pub entries: Vec<String>,
-    /// Output file, written atomically (default, or `-`: standard output).
+    /// Skin `--to blender` only: the Principled BSDF's Subsurface Method, burley, random-walk
+    /// or random-walk-skin (default).
+    #[arg(long = "method", value_name = "METHOD")]
+    pub method: Option<String>,
+    /// Output file, written atomically (default, or `-`: standard output); a folder for
+    /// `--to unity`.
     #[arg(short = 'o', long = "out", alias = "output", value_name = "FILE")]
     pub output: Option<PathBuf>,
     /// No summary or "wrote" line on stderr (errors still go there).
@@ -35,6 +39,7 @@ pub fn run(a: ExportArgs) -> anyhow::Result<()> {
         table: a.table,
         to: a.to,
         entries: a.entries,
+        method: a.method,
     };
     let head = read_head(&req.table)?;
     let export = if head == formats::table::MAGIC {
@@ -79,29 +84,42 @@ fn read_head(table: &Path) -> anyhow::Result<[u8; 8]> {
     Ok(head)
 }
 
-/// Prints the export's summary to stderr, then writes its document to `output` (atomically)
-/// or stdout, then confirms a file write where the export says what it wrote.
+/// Prints the export's summary to stderr, then writes its documents ([`layout::write`]: to
+/// `output`, atomically, or stdout; a side file beside the file; or a folder), then confirms a
+/// file write where the export says what it wrote.
 fn emit(export: &Export, output: Option<&Path>, quiet: bool) -> anyhow::Result<()> {
+    use crate::export::layout::{self, Written};
     if let Some(line) = export.summary.as_ref().filter(|_| !quiet) {
         eprintln!("{line}");
     }
-    match output {
-        Some(path) => {
-            crate::output::atomic::write(path, export.text.as_bytes())
-                .with_context(|| format!("writing {}", path.display()))?;
-            if let Some(what) = export.written.as_ref().filter(|_| !quiet) {
+    let written = layout::write(export, output)?;
+    if quiet {
+        return Ok(());
+    }
+    let what = export.written.as_deref();
+    match written {
+        Written::Stream {
+            side_skipped: Some(side),
+        } => {
+            eprintln!("baker export: {side} not written (a side file needs -o FILE to sit beside)")
+        }
+        Written::Stream { side_skipped: None } => {}
+        Written::File { main, side } => {
+            if let Some(what) = what {
+                let side = side.map_or(String::new(), |s| format!(" and {}", s.display()));
                 eprintln!(
-                    "baker export: {what} → {} ({})",
-                    path.display(),
+                    "baker export: {what} → {}{side} ({})",
+                    main.display(),
                     export.target
                 );
             }
         }
-        None => {
-            let mut out = std::io::stdout().lock();
-            out.write_all(export.text.as_bytes())?;
-            out.flush()?;
-        }
+        Written::Folder { dir, files } => eprintln!(
+            "baker export: {} → {} ({files} files, {})",
+            what.unwrap_or("the export"),
+            dir.display(),
+            export.target
+        ),
     }
     Ok(())
 }
@@ -121,6 +139,7 @@ mod tests {
                 table: table.clone(),
                 to: to.into(),
                 entries: entry.map(str::to_string).into_iter().collect(),
+                method: None,
                 output: Some(out.clone()),
                 quiet: true,
             })

@@ -667,7 +667,12 @@ impl TraceReport {
                     h2[b] / (grid.solid_angle(it) * t_mid.cos().max(1e-6))
                 })
                 .collect();
-            crate::output::slice::write_slice_png(png, (nt, np), &density, 4)?;
+            let title = format!(
+                "{label}: traced at θi = {}°, φi = {}°, {} photons",
+                a.theta_i, a.phi_i, self.launched
+            );
+            let bar = "fraction per sr ÷ cos θo (sr⁻¹)";
+            crate::output::slice::write_slice_png(png, (nt, np), &density, &title, bar)?;
         }
         if a.json {
             return self.write_json(a, t);

@@ -4,15 +4,16 @@
 //!   ([`burley`]) and the documents of OpenPBR/MaterialX, Blender, Unreal, Unity HDRP, pbrt-v4
 //!   and Mitsuba 3, one file per engine.
 //! - [`fiber`]: fiber BCSDF tables (`.bcsdf`) → a fit of the Chiang et al. 2016 far-field model
-//!   ([`chiang`]) and pbrt-v4, Mitsuba 3 and Blender Principled Hair parameters, one file per
-//!   engine.
+//!   ([`chiang`]) and pbrt-v4, Mitsuba 3, Blender Principled Hair and MaterialX
+//!   `chiang_hair_bsdf` parameters, one file per engine.
 //!
-//! Exporters return the document and what to tell the user ([`Export`]); the command line
-//! (`cli/export.rs`) writes and prints. Every conversion cites its source next to the formula.
+//! Exporters return the document and what to tell the user ([`Export`]); [`layout::write`]
+//! puts the documents on disk and the command line (`cli/export.rs`) prints. Every conversion cites its source next to the formula.
 
 pub mod burley;
 pub mod chiang;
 pub mod fiber;
+pub mod layout;
 pub mod skin;
 mod xml;
 
@@ -30,6 +31,9 @@ pub struct ExportRequest {
     pub to: String,
     /// Skin entries or one fiber variant; empty = every entry (skin) or the first variant.
     pub entries: Vec<String>,
+    /// `--method` as given: the Subsurface Method of a skin export `--to blender`
+    /// ([`skin::blender::Method`]); `None` = its default. Any other export refuses it.
+    pub method: Option<String>,
 }
 
 /// The result of an export: the document and the messages that go with it.
@@ -45,10 +49,39 @@ pub struct Export {
     /// What the document holds ("3 entries"), for the line printed after it was written to a
     /// file: `baker export: {written} → FILE (TARGET)` (skin exports).
     pub written: Option<String>,
+    /// Where the documents go: one file (most targets), a file and a side file (Unreal: the
+    /// editor script and its JSON), or a folder (Unity: one `.asset` per entry) ([`layout`]).
+    pub layout: Layout,
+}
+
+/// How an export's documents reach the disk ([`layout::write`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum Layout {
+    /// [`Export::text`] alone: to `-o FILE`, or standard output.
+    #[default]
+    File,
+    /// [`Export::text`] to `-o FILE` (or standard output), and `text` here beside it, at FILE
+    /// with its extension replaced by `ext` (only with `-o`).
+    WithSide {
+        ext: &'static str,
+        text: String,
+        /// What the side file is ("the profiles' fields as JSON"), for messages.
+        what: &'static str,
+    },
+    /// A folder (`-o DIR`, required) holding `files` (plain names, contents), written into a
+    /// staging folder and renamed into place. `index` is one of the files, a JSON document
+    /// whose `"format"` is `format` and whose `"files"` lists every file: a folder holding
+    /// such an index and nothing else may be replaced; any other existing folder is refused.
+    /// [`Export::text`] is the index.
+    Folder {
+        files: Vec<(String, String)>,
+        index: String,
+        format: &'static str,
+    },
 }
 
 /// The `--to` values of fiber tables.
-pub const FIBER_TARGETS: [&str; 4] = ["chiang", "pbrt", "mitsuba", "blender"];
+pub const FIBER_TARGETS: [&str; 5] = ["chiang", "pbrt", "mitsuba", "blender", "mtlx"];
 
 /// The tables of one kind: its name, what its file is, and its `--to` values.
 pub(crate) struct TableKind<'a> {
@@ -123,6 +156,7 @@ mod tests {
             table: PathBuf::from(table),
             to: to.into(),
             entries: Vec::new(),
+            method: None,
         }
     }
 
@@ -148,7 +182,7 @@ mod tests {
         let m = message(fiber::export(&req("a.bcsdf", "burley")));
         assert!(m.contains("\"burley\" is a skin export target"), "{m}");
         assert!(
-            m.contains("fiber targets: chiang, pbrt, mitsuba, blender"),
+            m.contains("fiber targets: chiang, pbrt, mitsuba, blender, mtlx"),
             "{m}"
         );
         let m = message(fiber::export(&req("a.bcsdf", "chaing")));

@@ -75,6 +75,79 @@ fn direction_arg(w: [f64; 3], name: &str) -> PyResult<[f64; 3]> {
     Ok(w)
 }
 
+/// Directions from little-endian f64 bytes, three per direction (x, y, z), each checked as
+/// [`direction_arg`] does (`name[i]` in the message).
+fn directions_arg(bytes: &[u8], name: &str) -> PyResult<Directions> {
+    if bytes.len() % 24 != 0 {
+        return Err(value_err(format!(
+            "{name}: {} bytes are not f64 triples (x, y, z)",
+            bytes.len()
+        )));
+    }
+    bytes
+        .chunks_exact(24)
+        .enumerate()
+        .map(|(i, b)| {
+            let w = [0, 1, 2].map(|k| f64::from_le_bytes(b[8 * k..8 * k + 8].try_into().unwrap()));
+            direction_arg(w, &format!("{name}[{i}]"))
+        })
+        .collect()
+}
+
+/// Directions in the fiber frame, one per query.
+type Directions = Vec<[f64; 3]>;
+
+/// `directions_arg` of two equally long arrays.
+fn pairs_arg(wi: &[u8], wo: &[u8]) -> PyResult<(Directions, Directions)> {
+    let (wi, wo) = (directions_arg(wi, "wi")?, directions_arg(wo, "wo")?);
+    if wi.len() != wo.len() {
+        return Err(value_err(format!(
+            "wi holds {} directions, wo {}",
+            wi.len(),
+            wo.len()
+        )));
+    }
+    Ok((wi, wo))
+}
+
+/// `f(i)` for every i < n, in index order, split over the machine's cores in contiguous
+/// chunks (`std::thread::scope`; each result depends on its index only, so the output does
+/// not depend on the thread count). The first error wins.
+fn par_map<T: Send>(
+    n: usize,
+    f: impl Fn(usize) -> Result<T, TableError> + Sync,
+) -> Result<Vec<T>, TableError> {
+    /// Below this many items per thread, threads cost more than they save.
+    const MIN_PER_THREAD: usize = 2048;
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .min(n.div_ceil(MIN_PER_THREAD))
+        .max(1);
+    if threads == 1 {
+        return (0..n).map(f).collect();
+    }
+    let per = n.div_ceil(threads);
+    let f = &f;
+    let parts: Vec<Result<Vec<T>, TableError>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads)
+            .map(|t| s.spawn(move || (t * per..((t + 1) * per).min(n)).map(f).collect()))
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("a batch worker panicked"))
+            .collect()
+    });
+    let mut out = Vec::with_capacity(n);
+    for p in parts {
+        out.extend(p?);
+    }
+    Ok(out)
+}
+
+fn f32_bytes(v: impl IntoIterator<Item = f32>) -> Vec<u8> {
+    v.into_iter().flat_map(f32::to_le_bytes).collect()
+}
+
 /// Every array of any `.bkt` file: `(kind, metadata JSON, [(name, dtype, shape, bytes,
 /// attrs)])`, arrays in file order.
 #[pyfunction]
@@ -356,6 +429,123 @@ impl BcsdfTableNative {
             .sample(wi, self.variant(variant)?, u1, u2)
             .map_err(py_err)?;
         Ok(s.map(|s| (s.wo, s.pdf)))
+    }
+
+    /// [`BcsdfTableNative::eval`] for n direction pairs: `wi`, `wo` are little-endian f64
+    /// bytes, three per direction; returns f32 bytes [n, n_channels].
+    fn eval_batch<'py>(
+        &self,
+        py: Python<'py>,
+        wi: &[u8],
+        wo: &[u8],
+        variant: usize,
+    ) -> PyResult<Bound<'py, PyByteArray>> {
+        let (wi, wo) = pairs_arg(wi, wo)?;
+        let v = self.variant(variant)?;
+        let t = &self.table;
+        let f = py
+            .detach(|| par_map(wi.len(), |i| t.eval(wi[i], wo[i], v)))
+            .map_err(py_err)?;
+        Ok(PyByteArray::new(py, &f32_bytes(f.into_iter().flatten())))
+    }
+
+    /// [`BcsdfTableNative::pdf`] for n direction pairs (as `eval_batch`): f64 bytes [n].
+    fn pdf_batch<'py>(
+        &self,
+        py: Python<'py>,
+        wi: &[u8],
+        wo: &[u8],
+        variant: usize,
+    ) -> PyResult<Bound<'py, PyByteArray>> {
+        let (wi, wo) = pairs_arg(wi, wo)?;
+        let v = self.variant(variant)?;
+        let t = &self.table;
+        let p = py
+            .detach(|| par_map(wi.len(), |i| t.pdf(wi[i], wo[i], v)))
+            .map_err(py_err)?;
+        Ok(PyByteArray::new(py, &f64_bytes(p)))
+    }
+
+    /// `eval_batch` and `pdf_batch` in one pass: `(f32 bytes [n, n_channels], f64 bytes [n])`.
+    fn eval_pdf_batch<'py>(
+        &self,
+        py: Python<'py>,
+        wi: &[u8],
+        wo: &[u8],
+        variant: usize,
+    ) -> PyResult<(Bound<'py, PyByteArray>, Bound<'py, PyByteArray>)> {
+        let (wi, wo) = pairs_arg(wi, wo)?;
+        let v = self.variant(variant)?;
+        let t = &self.table;
+        let fp = py
+            .detach(|| {
+                par_map(wi.len(), |i| {
+                    Ok((t.eval(wi[i], wo[i], v)?, t.pdf(wi[i], wo[i], v)?))
+                })
+            })
+            .map_err(py_err)?;
+        let f = f32_bytes(fp.iter().flat_map(|(f, _)| f.iter().copied()));
+        let p = f64_bytes(fp.iter().map(|(_, p)| *p));
+        Ok((PyByteArray::new(py, &f), PyByteArray::new(py, &p)))
+    }
+
+    /// [`BcsdfTableNative::sample`] for n incoming directions: `wi` as in `eval_batch`, `u`
+    /// little-endian f64 bytes, two uniform numbers in [0, 1] per direction. Returns
+    /// `(wo f64 bytes [n, 3], pdf f64 bytes [n], f f32 bytes [n, n_channels])`, f = eval(wi,
+    /// wo); where the variant scatters nothing, wo = (0, 0, 0) and pdf = f = 0.
+    #[allow(clippy::type_complexity)]
+    fn sample_batch<'py>(
+        &self,
+        py: Python<'py>,
+        wi: &[u8],
+        u: &[u8],
+        variant: usize,
+    ) -> PyResult<(
+        Bound<'py, PyByteArray>,
+        Bound<'py, PyByteArray>,
+        Bound<'py, PyByteArray>,
+    )> {
+        let wi = directions_arg(wi, "wi")?;
+        if u.len() != 16 * wi.len() {
+            return Err(value_err(format!(
+                "u holds {} bytes, expected two f64 per direction ({} bytes)",
+                u.len(),
+                16 * wi.len()
+            )));
+        }
+        let u: Vec<f64> = u
+            .chunks_exact(8)
+            .map(|b| f64::from_le_bytes(b.try_into().unwrap()))
+            .collect();
+        if let Some(i) = u.iter().position(|x| !(0.0..=1.0).contains(x)) {
+            return Err(value_err(format!(
+                "u[{}][{}] = {} is not in [0, 1]",
+                i / 2,
+                i % 2,
+                u[i]
+            )));
+        }
+        let v = self.variant(variant)?;
+        let nc = self.table.dir.channels.len();
+        let t = &self.table;
+        let s = py
+            .detach(|| {
+                par_map(wi.len(), |i| {
+                    Ok(match t.sample(wi[i], v, u[2 * i], u[2 * i + 1])? {
+                        Some(s) => (s.wo, s.pdf, t.eval(wi[i], s.wo, v)?),
+                        None => ([0.0; 3], 0.0, vec![0.0; nc]),
+                    })
+                })
+            })
+            .map_err(py_err)?;
+        let wo = f64_bytes(s.iter().flat_map(|(w, _, _)| w.iter().copied()));
+        let pdf = f64_bytes(s.iter().map(|(_, p, _)| *p));
+        let f = f32_bytes(s.iter().flat_map(|(_, _, f)| f.iter().copied()));
+        Ok((
+            PyByteArray::new(py, &wo),
+            PyByteArray::new(py, &pdf),
+            PyByteArray::new(py, &f),
+        ))
     }
 
     fn albedo(&self, wi: [f64; 3], variant: usize) -> PyResult<Vec<f32>> {

@@ -6,8 +6,8 @@
 //!   (layout in formats/FORMAT.md and `formats::bcsdf`);
 //! - `<entry>/<entry>.h5`: the same numbers, one group per table, chunked per incoming
 //!   direction, shuffle + deflate, axes as dimension scales, plus the sampling CDFs;
-//! - `preview/<entry>.png` (false-colour log slices, θi ∈ {0°, −45°, −80°} × fiber rotations
-//!   φi ∈ {0°, 30°, 60°, 90°}) and `preview/<entry>.exr` (linear RGB f in sr⁻¹, same grid);
+//! - `preview/<entry>.png` (θo × Δφ slices of f on a log scale with axes and a colour bar, the
+//!   layout of Table 8: θi ∈ {0°, −45°, −80°} × fiber rotations φi ∈ {0°, 90°}) and `preview/<entry>.exr` (linear RGB f in sr⁻¹, same grid);
 //! - `manifest.json`: settings, symmetry, noise, sizes and SHA-256 of every file, and
 //!   `timing.json`.
 

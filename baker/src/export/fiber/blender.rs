@@ -2,6 +2,21 @@
 
 use super::fit::FiberFit;
 use super::summary::{list, summary};
+use crate::error::UsageError;
+use crate::export::ExportRequest;
+
+/// `--method` (the Subsurface Method of a skin `--to blender` export) on a fiber table: a
+/// usage error; the Principled Hair BSDF has no such choice.
+pub(super) fn refuse_method(req: &ExportRequest) -> Result<(), UsageError> {
+    match &req.method {
+        None => Ok(()),
+        Some(m) => Err(UsageError(format!(
+            "--method {m:?}: {} is a fiber table; --method chooses the Subsurface Method of a \
+             skin table's --to blender export (fiber exports have no method)",
+            req.table.display()
+        ))),
+    }
+}
 
 /// Blender's Offset socket, radians: −α (see the [`fiber`](super) module docs).
 pub(super) fn blender_offset_rad(alpha_deg: f64) -> f64 {

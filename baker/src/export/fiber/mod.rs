@@ -1,6 +1,7 @@
-//! `baker export TABLE.bcsdf --to chiang|pbrt|mitsuba|blender`: the closest Chiang et al. 2016
+//! `baker export TABLE.bcsdf --to chiang|pbrt|mitsuba|blender|mtlx`: the closest Chiang et al. 2016
 //! fiber to a baked BCSDF table ([`super::chiang`]), with its error, for engines that cannot
-//! read the table. One file per target: [`chiang_json`], [`pbrt`], [`mitsuba`], [`blender`].
+//! read the table. One file per target: [`chiang_json`], [`pbrt`], [`mitsuba`], [`blender`],
+//! [`mtlx`].
 //!
 //! | target | writes |
 //! |---|---|
@@ -8,6 +9,7 @@
 //! | `pbrt` | a pbrt-v4 `Material "hair"` statement |
 //! | `mitsuba` | a Mitsuba 3 scene file holding one `<bsdf type="hair">` (load it, or `<include>` it and `<ref>` its id) |
 //! | `blender` | a Python script that builds a Principled Hair BSDF (Chiang model, absorption coefficient) material |
+//! | `mtlx` | a MaterialX 1.39 document: one `chiang_hair_bsdf` (pbrlib), its `surface` and `surfacematerial` (conversions in [`mtlx`]) |
 //!
 //! The parameter conversions, each with its source:
 //! - Mitsuba 3 (`src/bsdfs/hair.cpp`): the fit *is* Mitsuba's model, so `int_ior` = η with
@@ -49,6 +51,7 @@ mod channels;
 pub mod chiang_json;
 mod fit;
 pub mod mitsuba;
+pub mod mtlx;
 pub mod pbrt;
 mod summary;
 
@@ -56,6 +59,7 @@ pub use blender::write_blender;
 pub use chiang_json::write_chiang;
 pub use fit::{fit_table, FiberFit};
 pub use mitsuba::write_mitsuba;
+pub use mtlx::write_mtlx;
 pub use pbrt::write_pbrt;
 
 /// The `--to` values of fiber tables.
@@ -78,6 +82,7 @@ pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
         };
         super::unknown_target(req, &fiber, &skin)
     })?;
+    blender::refuse_method(req)?;
     let table =
         Bcsdf::open(&req.table).with_context(|| format!("reading {}", req.table.display()))?;
     // Every chunk is checked (checksums, finite values) before anything is exported.
@@ -105,6 +110,7 @@ pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
         "chiang" => write_chiang(&fit),
         "pbrt" => write_pbrt(&fit),
         "mitsuba" => write_mitsuba(&fit),
+        "mtlx" => write_mtlx(&fit),
         _ => write_blender(&fit),
     };
     Ok(Export {
@@ -112,6 +118,7 @@ pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
         target,
         summary: Some(summary::stderr_line(&fit, &req.table.display().to_string())),
         written: None,
+        layout: super::Layout::File,
     })
 }
 
@@ -134,7 +141,7 @@ fn select_variant(table: &Bcsdf, req: &ExportRequest) -> Result<usize, UsageErro
     }
 }
 
-/// Every target but `chiang` needs RGB or wavelength channels; Blender needs RGB.
+/// Every target but `chiang` needs RGB or wavelength channels; Blender and MaterialX need RGB.
 fn check_channels(table: &Bcsdf, req: &ExportRequest, target: &str) -> Result<(), UsageError> {
     let channels = Channels::of(&table.dir.channels);
     if target != "chiang" && channels == Channels::Other {
@@ -145,10 +152,14 @@ fn check_channels(table: &Bcsdf, req: &ExportRequest, target: &str) -> Result<()
             table.dir.channels.join(", ")
         )));
     }
-    if target == "blender" && channels != Channels::Rgb {
+    if matches!(target, "blender" | "mtlx") && channels != Channels::Rgb {
+        let who = if target == "blender" {
+            "Blender's Principled Hair BSDF"
+        } else {
+            "MaterialX's chiang_hair_bsdf"
+        };
         return Err(UsageError(format!(
-            "{}: Blender's Principled Hair BSDF takes RGB; this table's channels are {} \
-             (bake it with `channels: rgb`)",
+            "{}: {who} takes RGB; this table's channels are {} (bake it with `channels: rgb`)",
             req.table.display(),
             table.dir.channels.join(", ")
         )));

@@ -89,3 +89,39 @@ fn spectral_channels_become_spectra() {
         write_pbrt(&f).contains("\"spectrum sigma_a\" [ 450 0.100000 550 0.500000 650 2.000000 ]")
     );
 }
+
+#[test]
+fn materialx_takes_the_fit_in_its_shaders_units() {
+    let f = fit();
+    let x = write_mtlx(&f);
+    // v and s as MaterialX's mx_chiang_hair_roughness computes them from (beta_m, beta_n).
+    let v = (0.726 * 0.2 + 0.812 * 0.04 + 3.7 * 0.2f64.powi(20)).powi(2);
+    let s = 0.265 * 0.35 + 1.194 * 0.35f64.powi(2) + 5.372 * 0.35f64.powi(22);
+    assert!(x.contains(&format!(
+        "<input name=\"roughness_R\" type=\"vector2\" value=\"{v:.6}, {s:.6}\" />"
+    )));
+    assert!(x.contains(&format!(
+        "<input name=\"roughness_TRT\" type=\"vector2\" value=\"{:.6}, {s:.6}\" />",
+        4.0 * v
+    )));
+    // alpha = -2.5 deg: the shader's tilt cuticle_angle*pi - pi/2 is +2.5 deg.
+    let c = 0.5 + 2.5f64.to_radians() / std::f64::consts::PI;
+    assert!(x.contains(&format!(
+        "name=\"cuticle_angle\" type=\"float\" value=\"{c:.6}\""
+    )));
+    assert!(
+        (mtlx::mtlx_cuticle_angle(-2.5) * std::f64::consts::PI
+            - std::f64::consts::FRAC_PI_2
+            - 2.5f64.to_radians())
+        .abs()
+            < 1e-12
+    );
+    assert!(x.contains(
+        "<input name=\"absorption_coefficient\" type=\"vector3\" value=\"0.100000, 0.500000, 2.000000\" />"
+    ));
+    assert!(x.contains("<surfacematerial name=\"M_disperse_red_1_1_\" type=\"material\">"));
+    let comments: Vec<&str> = x.split("<!--").skip(1).collect();
+    assert!(comments
+        .iter()
+        .all(|c| !c.split("-->").next().unwrap().contains("--")));
+}

@@ -11,9 +11,9 @@
 //! |---|---|---|
 //! | `burley` | JSON | A, d, the three mean free paths of the paper, the fit error next to the six-Gaussian error |
 //! | `mtlx` | MaterialX 1.39 | one `open_pbr_surface` + `surfacematerial` per entry: `subsurface_color`, `subsurface_radius` (mm), `subsurface_radius_scale` |
-//! | `blender` | Python | Principled BSDF (Blender 4.x), Christensen–Burley method: Base Color, Subsurface Weight/Radius/Scale, IOR |
-//! | `unreal` | JSON | `SubsurfaceProfile` fields: SurfaceAlbedo, MeanFreePathColor, MeanFreePathDistance (cm), WorldUnitScale |
-//! | `unity` | JSON | HDRP diffusion profile: scatteringDistance, scatteringDistanceMultiplier (mm), worldScale, ior, … |
+//! | `blender` | Python | Principled BSDF (Blender 3.0 – 5.x), Subsurface Method `--method` (default Random Walk (Skin)): Base Color, Subsurface Weight/Radius/Scale, IOR, Subsurface IOR |
+//! | `unreal` | Unreal Editor Python (+ JSON beside it) | a script that creates or updates `SubsurfaceProfile` assets: surface_albedo, mean_free_path_color, mean_free_path_distance (cm), world_unit_scale; `-o X.py` also writes `X.json` |
+//! | `unity` | a folder (`-o DIR`) | one HDRP Diffusion Profile `.asset` (+ `.meta`) per entry: scatteringDistance, scatteringDistanceMultiplier (mm), worldScale, ior, …; `profiles.json` lists them, with the fields as JSON |
 //! | `pbrt` | pbrt-v4 scene text | one `MakeNamedMaterial` of type `subsurface` per entry: reflectance, mfp, scale, eta |
 //! | `mitsuba` | Mitsuba 3 XML | per entry a `null` boundary BSDF and a `homogeneous` interior medium |
 //!
@@ -24,7 +24,9 @@
 //! they get C = A/(1 − F0) (OpenPBR specification, "Subsurface": E_multi-scatter =
 //! (1 − E_spec)·C). Screen-space models (Unreal, Unity) take A itself.
 //!
-//! All entries go into one file for every target; `--entry` keeps one.
+//! All entries go into one file for every target but `unity` (one asset per entry);
+//! `--entry` keeps one. Every skin export prints the Burley fit's error on stderr
+//! ([`fit_summary`]).
 
 //!
 //! Files: [`fit`] (an entry's Burley fit, [`SkinFit`]), [`provenance`] (the header line),
@@ -47,15 +49,15 @@ pub mod provenance;
 pub mod unity;
 pub mod unreal;
 
-pub use blender::write_blender;
+pub use blender::{method_of, write_blender, write_blender_with};
 pub use burley_json::write_burley;
 pub use fit::{fit_entry, SkinFit};
 pub use mitsuba::write_mitsuba;
 pub use mtlx::write_mtlx;
 pub use pbrt::write_pbrt;
 pub use provenance::Provenance;
-pub use unity::write_unity;
-pub use unreal::write_unreal;
+pub use unity::{unity_files, write_unity, UNITY_FORMAT, UNITY_INDEX};
+pub use unreal::{write_unreal, write_unreal_script};
 
 /// An export target of a skin table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -124,6 +126,7 @@ pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
         };
         super::unknown_target(req, &skin, &fiber)
     })?;
+    let method = method_of(req, target)?;
     let (table, index) = read_table(req)?;
     let names = select_entries(&table, req)?;
     let fits = names
@@ -146,15 +149,61 @@ pub fn export(req: &ExportRequest) -> anyhow::Result<Export> {
     }
     let prov = Provenance::from_table(&table, &req.table.display().to_string());
     Ok(Export {
-        text: write(target, &fits, &prov),
+        text: match target {
+            Target::Blender => write_blender_with(&fits, &prov, method),
+            Target::Unreal => write_unreal_script(&fits, &prov),
+            _ => write(target, &fits, &prov),
+        },
         target: target.name(),
-        summary: None,
+        summary: Some(fit_summary(&fits, &req.table.display().to_string())),
         written: Some(format!(
             "{} entr{}",
             fits.len(),
             if fits.len() == 1 { "y" } else { "ies" }
         )),
+        layout: layout(target, &fits, &prov),
     })
+}
+
+/// Where a skin target's documents go: Unreal's script with its JSON beside it, Unity's
+/// folder of assets ([`unity`]), one file for the rest.
+fn layout(target: Target, fits: &[SkinFit], prov: &Provenance) -> super::Layout {
+    match target {
+        Target::Unreal => super::Layout::WithSide {
+            ext: "json",
+            text: write_unreal(fits, prov),
+            what: "the profiles' fields as JSON",
+        },
+        Target::Unity => super::Layout::Folder {
+            files: unity_files(fits, prov),
+            index: UNITY_INDEX.to_string(),
+            format: UNITY_FORMAT,
+        },
+        _ => super::Layout::File,
+    }
+}
+
+/// The line printed on stderr for every skin export: per channel, the Burley fit's error
+/// (energy-weighted relative L1 inside r99, as `burley_error_rgb`) of the worst entry, and
+/// the median over the entries.
+pub fn fit_summary(fits: &[SkinFit], table: &str) -> String {
+    let channels = ["R", "G", "B"].iter().enumerate().map(|(c, ch)| {
+        let mut e: Vec<(f64, &str)> = fits
+            .iter()
+            .map(|f| (f.burley_error_rgb()[c], f.name.as_str()))
+            .collect();
+        e.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (worst, name) = e.last().copied().unwrap_or((f64::NAN, "-"));
+        let median = e.get(e.len() / 2).map_or(f64::NAN, |m| m.0);
+        format!("{ch} {worst:.4} ({name}), median {median:.4}")
+    });
+    format!(
+        "{table}: Burley fit of {} entr{}, relative L1 error inside r99 (energy-weighted); \
+         worst entry per channel: {}",
+        fits.len(),
+        if fits.len() == 1 { "y" } else { "ies" },
+        channels.collect::<Vec<_>>().join("; ")
+    )
 }
 
 /// The table of `req` decoded twice (as a profile table and as an index of its arrays), every

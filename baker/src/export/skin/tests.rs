@@ -68,6 +68,7 @@ fn request(table: &std::path::Path, to: &str, entry: Option<&str>) -> ExportRequ
         table: table.to_path_buf(),
         to: to.into(),
         entries: entry.map(str::to_string).into_iter().collect(),
+        method: None,
     }
 }
 
@@ -77,7 +78,8 @@ fn burley_export_recovers_the_generating_profile() {
     let table = synthetic_table(dir.path());
     let export = export(&request(&table, "burley", None)).unwrap();
     assert_eq!(export.written.as_deref(), Some("2 entries"));
-    assert_eq!((export.target, export.summary), ("burley", None));
+    assert_eq!(export.target, "burley");
+    assert!(export.summary.unwrap().contains("Burley fit of 2 entries"));
     let doc: Value = serde_json::from_str(&export.text).unwrap();
     let entries = doc["entries"].as_array().unwrap();
     assert_eq!(entries.len(), 2);
@@ -108,7 +110,7 @@ fn every_target_writes_every_entry() {
         for name in ["typeI_age30_xi0", "typeVI_age80_xi1"] {
             assert!(text.contains(name), "{}: no {name}", t.name());
         }
-        if matches!(t, Target::Burley | Target::Unreal | Target::Unity) {
+        if matches!(t, Target::Burley | Target::Unity) {
             serde_json::from_str::<Value>(&text).unwrap();
         }
     }
@@ -203,9 +205,10 @@ fn engine_values_follow_the_stated_conventions() {
         assert!((colour[c] - A[c] / 0.96).abs() < 1e-6);
     }
     assert!(x.contains("name=\"SR_skin_1\""), "identifier: {x}");
-    // Blender: radius = 4π d.
-    let b = write_blender(std::slice::from_ref(&f), &prov);
+    // Blender, Christensen–Burley: radius = 4π d.
+    let b = blender::write_blender_with(std::slice::from_ref(&f), &prov, blender::Method::Burley);
     assert!(b.contains(&nums(&D.map(|d| 4.0 * PI * d))), "{b}");
+    assert!(b.contains("METHOD = \"BURLEY\""), "{b}");
     // Mitsuba: scale × sigma_t = 1/ℓ.
     let m = write_mitsuba(&[f], &prov);
     assert!(
@@ -316,4 +319,250 @@ fn unreal_and_unity_fields_match_the_engines_own_conversions() {
             );
         }
     }
+}
+
+/// Blender's random walks: Subsurface Radius = 4π·ℓ (`random-walk`) and ℓ/√(3(1 − α′))
+/// (`random-walk-skin`), ℓ = d·(1.9 − C + 3.5(C − 0.8)²), C = A/(1 − F0), α′ Cycles' dipole
+/// albedo of C; Base Color = C and IOR = η for every method.
+#[test]
+fn blender_methods_follow_cycles_conventions() {
+    use blender::{blender_parameters, cycles_dipole_alpha_prime, Method};
+    let f = fit_of(A, D);
+    for m in Method::ALL {
+        let p = blender_parameters(&f, m);
+        assert_eq!(p.ior, 1.5);
+        for c in 0..3 {
+            let col = A[c] / 0.96;
+            assert!((p.base_color[c] - col).abs() < 1e-12, "{m:?} {c}");
+            let l = D[c] * (1.9 - col + 3.5 * (col - 0.8) * (col - 0.8));
+            let want = match m {
+                Method::Burley => 4.0 * PI * D[c],
+                Method::RandomWalk => 4.0 * PI * l,
+                Method::RandomWalkSkin => {
+                    l / (3.0 * (1.0 - cycles_dipole_alpha_prime(col, 1.5))).sqrt()
+                }
+            };
+            assert!((p.radius_mm[c] / want - 1.0).abs() < 1e-12, "{m:?} {c}");
+        }
+    }
+    // The default is the skin walk, and the script says so.
+    let prov = Provenance::default();
+    let s = write_blender(std::slice::from_ref(&f), &prov);
+    assert!(s.contains("METHOD = \"RANDOM_WALK_SKIN\""), "{s}");
+    let skin = blender_parameters(&f, Method::RandomWalkSkin);
+    assert!(s.contains(&nums(&skin.radius_mm)), "{s}");
+    // Different methods give different radii (a walk's ℓ is not Burley's d).
+    let walk = blender_parameters(&f, Method::RandomWalk).radius_mm[0];
+    let burley = blender_parameters(&f, Method::Burley).radius_mm[0];
+    assert!((walk / burley - 1.0).abs() > 0.05);
+}
+
+/// α′ inverts Jensen's dipole reflectance ½α′(1 + e^(−(4/3)A_J·s))e^(−s), s = √(3(1 − α′)),
+/// within Cycles' 12 bisection steps (2⁻¹³ of the bracket), at several albedos and IORs,
+/// against a 60-step bisection written here; and Cycles' end clamps.
+#[test]
+fn cycles_dipole_albedo_inverts_the_dipole() {
+    use blender::cycles_dipole_alpha_prime;
+    for eta in [1.33, 1.4, 1.5] {
+        let inv = 1.0 / eta;
+        let fdr = -1.44 * inv * inv + 0.71 * inv + 0.668 + 0.0636 * eta;
+        let aj = (1.0 + fdr) / (1.0 - fdr);
+        let rd = |ap: f64| {
+            let s = (3.0 * (1.0 - ap)).sqrt();
+            0.5 * ap * (1.0 + (-4.0 / 3.0 * aj * s).exp()) * (-s).exp()
+        };
+        for c in [0.01, 0.2, 0.45, 0.7, 0.9] {
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if rd(mid) < c {
+                    lo = mid
+                } else {
+                    hi = mid
+                }
+            }
+            let ours = cycles_dipole_alpha_prime(c, eta);
+            assert!(
+                (ours - lo).abs() <= 1.0 / 4096.0,
+                "η {eta} C {c}: {ours} vs {lo}"
+            );
+        }
+    }
+    assert_eq!(cycles_dipole_alpha_prime(5e-5, 1.4), 0.0);
+    assert_eq!(cycles_dipole_alpha_prime(0.995, 1.4), 0.999999);
+    // η is clamped to Cycles' [1.01, 3.8].
+    assert_eq!(
+        cycles_dipole_alpha_prime(0.3, 1.0),
+        cycles_dipole_alpha_prime(0.3, 1.01)
+    );
+}
+
+/// `--method`: a wrong name lists the methods; on another target or a fiber table, it is
+/// refused before any table is read.
+#[test]
+fn method_is_checked() {
+    let req = |to: &str, m: &str, table: &str| ExportRequest {
+        table: table.into(),
+        to: to.into(),
+        entries: Vec::new(),
+        method: Some(m.into()),
+    };
+    let usage = |r: anyhow::Result<crate::export::Export>| {
+        let e = r.unwrap_err();
+        e.downcast_ref::<UsageError>()
+            .unwrap_or_else(|| panic!("not a usage error: {e:#}"))
+            .0
+            .clone()
+    };
+    let m = usage(export(&req("blender", "randomwalk", "p.bkt")));
+    assert!(m.contains("not a Blender subsurface method"), "{m}");
+    assert!(
+        m.contains("allowed: burley, random-walk, random-walk-skin"),
+        "{m}"
+    );
+    let m = usage(export(&req("mtlx", "burley", "p.bkt")));
+    assert!(m.contains("--to mtlx has no method"), "{m}");
+    let m = usage(crate::export::fiber::export(&req(
+        "blender", "burley", "a.bcsdf",
+    )));
+    assert!(m.contains("a.bcsdf is a fiber table"), "{m}");
+    // A valid method reaches the table (here: missing, so not a usage error about --method).
+    let e = export(&req("blender", "random-walk", "/nowhere/p.bkt")).unwrap_err();
+    assert!(!format!("{e:#}").contains("--method"), "{e:#}");
+}
+
+/// The exported script with each method, end to end from a table.
+#[test]
+fn blender_export_writes_the_chosen_method() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = synthetic_table(dir.path());
+    for m in blender::Method::ALL {
+        let mut r = request(&table, "blender", None);
+        r.method = Some(m.name().into());
+        let text = export(&r).unwrap().text;
+        assert!(
+            text.contains(&format!("METHOD = \"{}\"", m.blender_enum())),
+            "{}",
+            m.name()
+        );
+        assert!(text.contains(&format!("--method {}", m.name())));
+        assert_eq!(text.matches("    (\"type").count(), 2);
+    }
+}
+
+#[test]
+fn every_skin_export_reports_the_worst_fit_error_per_channel() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = synthetic_table(dir.path());
+    let fits: Vec<SkinFit> = ["typeI_age30_xi0", "typeVI_age80_xi1"]
+        .iter()
+        .map(|n| {
+            let mut f = fit_of(A, D);
+            f.name = n.to_string();
+            f
+        })
+        .collect();
+    let mut fits = fits;
+    fits[1].burley[1].error = 0.25;
+    let line = fit_summary(&fits, "p.bkt");
+    assert!(
+        line.contains("G 0.2500 (typeVI_age80_xi1), median 0.2500"),
+        "{line}"
+    );
+    assert!(line.contains("R 0.0100 ("), "{line}");
+    for t in Target::ALL {
+        let e = export(&request(&table, t.name(), None)).unwrap();
+        let s = e.summary.unwrap_or_default();
+        assert!(s.contains("Burley fit of 2 entries"), "{}: {s}", t.name());
+    }
+}
+
+#[test]
+fn unreal_writes_an_editor_script_with_its_json_beside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = synthetic_table(dir.path());
+    let e = export(&request(&table, "unreal", None)).unwrap();
+    let crate::export::Layout::WithSide { ext, text, .. } = &e.layout else {
+        panic!("{:?}", e.layout)
+    };
+    assert_eq!(*ext, "json");
+    let json: Value = serde_json::from_str(text).unwrap();
+    let p = &json["profiles"][1];
+    assert_eq!(p["asset"], "SP_typeVI_age80_xi1");
+    // The script carries the JSON's numbers exactly, under the Python API's names.
+    let s = &e.text;
+    assert!(s.contains("unreal.AssetToolsHelpers.get_asset_tools()"));
+    assert!(s.contains("unreal.SubsurfaceProfileFactory()"));
+    assert!(s.contains("unreal.EditorAssetLibrary.does_asset_exist(path)"));
+    let sp = &p["SubsurfaceProfile"];
+    let dist = sp["MeanFreePathDistance"].as_f64().unwrap();
+    assert!(s.contains(&format!("\"mean_free_path_distance\": {dist:?},")));
+    let c = &sp["MeanFreePathColor"];
+    let rgb = [
+        c["R"].as_f64().unwrap(),
+        c["G"].as_f64().unwrap(),
+        c["B"].as_f64().unwrap(),
+    ];
+    assert!(s.contains(&format!(
+        "\"mean_free_path_color\": ({:?}, {:?}, {:?}),",
+        rgb[0], rgb[1], rgb[2]
+    )));
+    assert!(s.contains("(\"SP_typeVI_age80_xi1\", \"typeVI_age80_xi1\", {"));
+    assert_eq!(s.matches("\"enable_burley\": True").count(), 2);
+    // Written with -o X.py: X.json beside it.
+    let py = dir.path().join("skin.py");
+    crate::export::layout::write(&e, Some(&py)).unwrap();
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("skin.json")).unwrap(),
+        *text
+    );
+}
+
+#[test]
+fn unity_writes_one_hdrp_asset_and_meta_per_entry() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = synthetic_table(dir.path());
+    let e = export(&request(&table, "unity", None)).unwrap();
+    let crate::export::Layout::Folder { files, index, .. } = &e.layout else {
+        panic!("{:?}", e.layout)
+    };
+    let names: Vec<&str> = files.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names.len(), 5, "{names:?}");
+    assert!(
+        names.contains(&"typeI_age30_xi0_5.asset")
+            && names.contains(&"typeI_age30_xi0_5.asset.meta")
+    );
+    let idx: Value = serde_json::from_str(&e.text).unwrap();
+    assert_eq!(idx["files"].as_array().unwrap().len(), 5);
+    assert_eq!(index, "profiles.json");
+    let asset = &files
+        .iter()
+        .find(|(n, _)| n == "typeI_age30_xi0_5.asset")
+        .unwrap()
+        .1;
+    assert!(asset.starts_with("%YAML 1.1\n%TAG !u! tag:unity3d.com,2011:\n--- !u!114 &11400000\n"));
+    assert!(asset.contains(
+        "  m_Script: {fileID: 11500000, guid: b2686e09ec7aef44bad2843e4416f057, type: 3}\n"
+    ));
+    assert!(asset.contains("  m_Version: 2\n") && asset.contains("    hash: 0\n"));
+    // The colour times the multiplier is d (mm), in single precision.
+    let p = &idx["profiles"][0]["DiffusionProfile"];
+    let mult = p["scatteringDistanceMultiplier"].as_f64().unwrap();
+    assert!(asset.contains(&format!(
+        "    scatteringDistanceMultiplier: {}\n",
+        mult as f32
+    )));
+    // The .meta GUID is deterministic (a re-export keeps it) and distinct per entry.
+    let meta = |n: &str| files.iter().find(|(f, _)| f == n).unwrap().1.clone();
+    let g0 = meta("typeI_age30_xi0_5.asset.meta");
+    let g1 = meta("typeVI_age80_xi1.asset.meta");
+    assert_ne!(g0, g1);
+    let again = export(&request(&table, "unity", None)).unwrap();
+    assert_eq!(again.layout, e.layout);
+    let guid = g0.lines().find_map(|l| l.strip_prefix("guid: ")).unwrap();
+    assert!(
+        guid.len() == 32 && guid.chars().all(|c| c.is_ascii_hexdigit()),
+        "{guid}"
+    );
+    assert_eq!(idx["profiles"][0]["guid"], guid);
 }

@@ -43,6 +43,14 @@ def _vec3(w, name):
     return [float(x) for x in w]
 
 
+def _directions(w, name):
+    """Directions as a C-contiguous little-endian float64 array [n, 3]."""
+    w = np.ascontiguousarray(w, dtype="<f8")
+    if w.ndim != 2 or w.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (n, 3), got {w.shape}")
+    return w
+
+
 def read_table(path):
     """Every array of any `.bkt` file: `(kind, metadata dict, {name: numpy array})`.
 
@@ -220,6 +228,39 @@ class BcsdfTable:
     def albedo(self, wi, variant=0):
         """Directional albedo Λ(ωi), float32 per channel."""
         return np.array(self._t.albedo(_vec3(wi, "wi"), int(variant)), dtype=np.float32)
+
+    # Batched queries (one native call for n directions, spread over the cores): the
+    # Mitsuba plugin (baker_formats.mitsuba) and anything else that evaluates many at once.
+
+    def eval_many(self, wi, wo, variant=0):
+        """`eval` for arrays of directions wi, wo [n, 3]: float32 [n, n_channels]."""
+        a, b = _directions(wi, "wi"), _directions(wo, "wo")
+        raw = self._t.eval_batch(a.tobytes(), b.tobytes(), int(variant))
+        return np.frombuffer(raw, dtype="<f4").reshape(len(a), len(self.channels))
+
+    def pdf_many(self, wi, wo, variant=0):
+        """`pdf` for arrays of directions wi, wo [n, 3]: float64 [n], sr^-1."""
+        a, b = _directions(wi, "wi"), _directions(wo, "wo")
+        return np.frombuffer(self._t.pdf_batch(a.tobytes(), b.tobytes(), int(variant)), dtype="<f8")
+
+    def eval_pdf_many(self, wi, wo, variant=0):
+        """`(eval_many, pdf_many)` in one pass."""
+        a, b = _directions(wi, "wi"), _directions(wo, "wo")
+        f, p = self._t.eval_pdf_batch(a.tobytes(), b.tobytes(), int(variant))
+        return (np.frombuffer(f, dtype="<f4").reshape(len(a), len(self.channels)),
+                np.frombuffer(p, dtype="<f8"))
+
+    def sample_many(self, wi, u, variant=0):
+        """`sample` for directions wi [n, 3] and uniform numbers u [n, 2] in [0, 1]:
+        `(wo [n, 3], pdf [n], f [n, n_channels])` with f = eval(wi, wo); where the variant
+        scatters nothing, wo = 0 and pdf = f = 0."""
+        a = _directions(wi, "wi")
+        u = np.ascontiguousarray(u, dtype="<f8")
+        if u.shape != (len(a), 2):
+            raise ValueError(f"u must have shape ({len(a)}, 2), got {u.shape}")
+        wo, pdf, f = self._t.sample_batch(a.tobytes(), u.tobytes(), int(variant))
+        return (np.frombuffer(wo, dtype="<f8").reshape(len(a), 3), np.frombuffer(pdf, dtype="<f8"),
+                np.frombuffer(f, dtype="<f4").reshape(len(a), len(self.channels)))
 
     def projected_area(self, w):
         """Projected area of a unit length of fiber seen from ω, µm (width at φ × cos θ)."""
