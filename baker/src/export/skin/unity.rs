@@ -79,7 +79,7 @@ fn file_names(ids: &[String]) -> Vec<(String, String)> {
 }
 
 /// JSON with one HDRP diffusion profile per entry: the folder's index (`files`) and the values
-/// of the `.asset` files with their derivation ([`profile`]).
+/// of the `.asset` files with their derivation (`profile`).
 pub fn write_unity(fits: &[SkinFit], prov: &Provenance) -> String {
     let ids = identifiers(fits);
     let names = file_names(&ids);

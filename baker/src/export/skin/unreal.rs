@@ -81,7 +81,7 @@ fn fields(f: &SkinFit) -> Fields {
 }
 
 /// JSON with one `SubsurfaceProfile` per entry (Burley, mean-free-path mode): the side file
-/// of the script, and what its values are ([`fields`]).
+/// of the script, and what its values are (`fields`).
 pub fn write_unreal(fits: &[SkinFit], prov: &Provenance) -> String {
     let ids = identifiers(fits);
     let entries: Vec<Value> = fits
