@@ -572,13 +572,9 @@ def check_mtlx_hair(path, par):
     absorption = sigma_a, ior = eta, cuticle_angle pi - pi/2 = -alpha (the shader's tilt,
     mx_hair_alpha_angles; Cycles' sign, see baker/src/export/fiber/mtlx.rs)."""
     import MaterialX as mx
+    from mtlx_doc import load_validated
     fails = []
-    doc = mx.createDocument()
-    mx.readFromXmlFile(doc, str(path))
-    lib = mx.createDocument()
-    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
-    doc.importLibrary(lib)
-    ok, msg = doc.validate()
+    doc, ok, msg = load_validated(path)
     if not ok:
         fails.append(f"mtlx: MaterialX {mx.getVersionString()} validate(): {msg}")
     nodes = [n for n in doc.getNodes() if n.getCategory() == "chiang_hair_bsdf"]

@@ -184,14 +184,9 @@ def entry_fits(doc):
 
 
 def check_mtlx(path, fits):
-    import MaterialX as mx
+    from mtlx_doc import load_validated
 
-    doc = mx.createDocument()
-    mx.readFromXmlFile(doc, str(path))
-    lib = mx.createDocument()
-    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
-    doc.importLibrary(lib)
-    ok, msg = doc.validate()
+    doc, ok, msg = load_validated(path)
     bad = [] if ok else [f"MaterialX: {msg.strip()[:400]}"]
     shaders = [n for n in doc.getNodes() if n.getCategory() == "open_pbr_surface"]
     materials = [n for n in doc.getNodes() if n.getCategory() == "surfacematerial"]
