@@ -5,7 +5,8 @@
 #
 # 1. builds the baker and bakes the default specs into out/ (cached: nothing is re-baked when
 #    out/fitzpatrick/ and out/fibers/ are complete; ~14 min on 2 cores when they are not);
-# 2. installs the Python module (Mitsuba plugin) and makes target/bpy-venv (Blender's bpy);
+# 2. installs the validation requirements (Mitsuba 3, numpy, zstandard, …), the Python module
+#    (Mitsuba plugin) and makes target/bpy-venv (Blender's bpy);
 # 3. skin_contact_sheet.png: the Fitzpatrick database at xi 0.5 through `--to blender`
 #    (Random Walk (Skin)), rendered in Cycles (validation/blender/contact_sheet.py);
 # 4. cloth_<fiber>.png: a plain weave rendered in Mitsuba 3 with the baked table
@@ -21,10 +22,18 @@ gallery=validation/gallery
 work=target/gallery
 mkdir -p "$gallery" "$work"
 
+# Mitsuba's LLVM variants (the cloth renders, the plugin's χ² test) compile through the system's
+# libLLVM; Dr.Jit 1.x emits llvm.maximum, which Debian 12's default LLVM 14 cannot lower on x86
+# ("LLVM ERROR: Cannot select: fmaximum"). Debian 12's libllvm19 can (root; skipped elsewhere).
+if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
+    apt-get install -y -qq libllvm19 >/dev/null
+fi
 cargo build --quiet --release -p baker
 baker=target/release/baker
 "$baker" bake specs/fitzpatrick.yaml specs/fibers.yaml -o out
-python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore ./formats/python
+pip=(python3 -m pip install --quiet --disable-pip-version-check --root-user-action=ignore)
+"${pip[@]}" -r validation/requirements.txt
+"${pip[@]}" ./formats/python
 bpy="$(bash validation/blender/venv.sh)"
 
 python3 validation/blender/contact_sheet.py --table out/fitzpatrick/profiles.bkt \
