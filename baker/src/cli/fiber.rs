@@ -9,7 +9,7 @@ use serde_json::json;
 use crate::error::UsageError;
 use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
-use crate::fiber::slices::BakeSettings;
+use crate::fiber::slices::{BakeSettings, ExpectedExits, Sampling};
 use crate::fiber::{trace, AngularGrid, Cuticle, Fiber, Incident, Section, Surface, TraceOptions};
 use crate::spec::fiber::FiberEntry;
 
@@ -58,6 +58,12 @@ pub struct FiberBenchArgs {
     /// With --thesis: override the spec's `bake.exit_draws` (draws per event met from inside).
     #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=256))]
     pub exit_draws: Option<u32>,
+    /// With --thesis: override the spec's `bake.expected_exits` (none, inside or all).
+    #[arg(long, requires = "thesis", value_parser = expected_exits_arg)]
+    pub expected_exits: Option<ExpectedExits>,
+    /// With --thesis: override the spec's `bake.sampling` (random or sobol).
+    #[arg(long, requires = "thesis", value_parser = sampling_arg)]
+    pub sampling: Option<Sampling>,
     /// Write the table to FILE, atomically, instead of standard output.
     #[arg(short = 'o', long = "out", value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -101,6 +107,12 @@ pub struct TraceArgs {
     /// With a spec entry: override its `bake.exit_draws` (draws per event met from inside).
     #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=256))]
     pub exit_draws: Option<u32>,
+    /// With a spec entry: override its `bake.expected_exits` (none, inside or all).
+    #[arg(long, requires = "specs", value_parser = expected_exits_arg)]
+    pub expected_exits: Option<ExpectedExits>,
+    /// With a spec entry: override its `bake.sampling` (random or sobol).
+    #[arg(long, requires = "specs", value_parser = sampling_arg)]
+    pub sampling: Option<Sampling>,
     /// Write the outgoing slice as a false-colour log PNG (like Table 8) to FILE.png; with
     /// several --entry, FILE is a folder and each entry gets `<entry>.png` in it.
     #[arg(short = 'o', long = "out", alias = "png", value_name = "FILE")]
@@ -146,6 +158,32 @@ pub fn run(c: FiberCommand) -> anyhow::Result<()> {
         FiberCommand::Trace(a) => run_trace(a),
         FiberCommand::Bench(a) => run_bench(a),
     }
+}
+
+/// A short label of an estimator: `split:exit_draws`, then `+ev` (inside exits scored in
+/// expectation) or `+ev+R` (and the first reflection), then `+sobol`.
+fn estimator_label(split: u32, exit: u32, ev: ExpectedExits, sampling: Sampling) -> String {
+    let ev = match ev {
+        ExpectedExits::None => "",
+        ExpectedExits::Inside => "+ev",
+        ExpectedExits::All => "+ev+R",
+    };
+    let qmc = if sampling == Sampling::Sobol {
+        "+sobol"
+    } else {
+        ""
+    };
+    format!("{split}:{exit}{ev}{qmc}")
+}
+
+/// `--expected-exits`: a word of the spec's `bake.expected_exits`.
+fn expected_exits_arg(s: &str) -> Result<ExpectedExits, String> {
+    crate::spec::fiber::choice_of(&crate::spec::fiber::EXPECTED_EXITS, s)
+}
+
+/// `--sampling`: a word of the spec's `bake.sampling`.
+fn sampling_arg(s: &str) -> Result<Sampling, String> {
+    crate::spec::fiber::choice_of(&crate::spec::fiber::SAMPLINGS, s)
 }
 
 /// The fibers `fiber bench` measures: a smooth circle, then the selected spec entries.
@@ -213,10 +251,10 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     )?;
     writeln!(
         s,
-        "{:<20} {:>6} {:>9} {:>10} {:>11} {:>8} {:>9} {:>11} {:>9} {:>7}",
+        "{:<20} {:>6} {:>14} {:>10} {:>11} {:>8} {:>9} {:>11} {:>9} {:>7}",
         "entry",
         "stored",
-        "split:exit",
+        "estimator",
         "photons",
         "s/direction",
         "noise",
@@ -229,16 +267,18 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
         let st = BakeSettings {
             split: a.split.unwrap_or(st.split),
             exit_draws: a.exit_draws.unwrap_or(st.exit_draws),
+            expected_exits: a.expected_exits.unwrap_or(st.expected_exits),
+            sampling: a.sampling.unwrap_or(st.sampling),
             ..st.clone()
         };
         let c = thesis::measure(e, &st, a.directions, &crate::cancel::Cancel::NEVER)?;
         let t10 = c.table_10_minutes;
         writeln!(
             s,
-            "{:<20} {:>6} {:>9} {:>10.3e} {:>11.2} {:>7.2}% {:>8.2}% {:>9.1} min {:>5} min {:>7}",
+            "{:<20} {:>6} {:>14} {:>10.3e} {:>11.2} {:>7.2}% {:>8.2}% {:>9.1} min {:>5} min {:>7}",
             c.entry,
             c.stored_directions,
-            format!("{}:{}", c.split, c.exit_draws),
+            estimator_label(c.split, c.exit_draws, c.expected_exits, c.sampling),
             c.photons_per_direction,
             c.seconds_per_direction,
             100.0 * c.median_rel_se,
@@ -475,6 +515,8 @@ fn targets_of(a: &TraceArgs) -> anyhow::Result<Vec<TraceTarget>> {
             seed: a.seed.unwrap_or(bake.seed),
             split: a.split.unwrap_or(bake.split),
             exit_draws: a.exit_draws.unwrap_or(bake.exit_draws),
+            expected_exits: a.expected_exits.unwrap_or(bake.expected_exits),
+            sampling: a.sampling.unwrap_or(bake.sampling),
             ..bake.clone()
         };
         st.max_photons = st.max_photons.max(st.photons);
@@ -719,10 +761,12 @@ impl TraceReport {
                 (None, _) => String::new(),
             };
             outln!(
-                "  estimator         the bake's: {}° bins, split {}, exit_draws {}{target}",
+                "  estimator         the bake's: {}° bins, split {}, exit_draws {}, expected_exits {:?}, sampling {:?}{target}",
                 st.res_deg,
                 st.split,
-                st.exit_draws
+                st.exit_draws,
+                st.expected_exits,
+                st.sampling
             )?;
             outln!(
                 "  noise             median relative error {:.2} % over {} bins (thesis: {:.2} %)",
@@ -792,6 +836,8 @@ impl TraceReport {
                 "photons_per_direction": st.photons_per_direction(),
                 "split": st.split,
                 "exit_draws": st.exit_draws,
+                "expected_exits": st.expected_exits,
+                "sampling": st.sampling,
                 "target_rel_se": st.target,
                 "max_photons_per_direction": st.max_photons,
                 "batch": st.batch,

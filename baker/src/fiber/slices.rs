@@ -32,12 +32,47 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::sweep::{ChannelKind, Channels};
-use super::tracer::{Draws, Setup};
+use super::tracer::{Draws, Exits, Setup};
 use super::{Fiber, Incident};
 use crate::cancel::{Cancel, Cancelled};
 use crate::math::rng::{batch_rng, uniform};
+use crate::math::sampler::{PathSampler, Scramble};
 use formats::{AngularGrid, Precision};
 use rand_core::Rng;
+
+/// Which first-facet exit lobes a bake scores in expectation ([`super::lobe`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ExpectedExits {
+    /// None: every exit is a draw.
+    None,
+    /// The exit lobes of events met from inside (TT, TRT, …).
+    Inside,
+    /// Those and the reflection lobe R of the first event, scored by a pass of launches of
+    /// its own ([`super::tracer`]'s `first_reflection`).
+    All,
+}
+
+impl ExpectedExits {
+    pub fn inside(self) -> bool {
+        self != ExpectedExits::None
+    }
+
+    pub fn first_reflection(self) -> bool {
+        self == ExpectedExits::All
+    }
+}
+
+/// Where the photons of a batch take their uniform numbers ([`crate::math::sampler`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sampling {
+    /// Independent random numbers; the entry offset stratified (j + u)/n across the beam.
+    Random,
+    /// Each batch one randomised (scrambled, shifted) Sobol' point set over the launch and
+    /// the first boundary events of every photon's main path.
+    Sobol,
+}
 
 /// Settings of a bake (`bake:` in a fiber spec).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -59,6 +94,10 @@ pub struct BakeSettings {
     pub exit_draws: u32,
     /// Photons per batch (one RNG stream, one term of the batch-means error).
     pub batch: u64,
+    /// Where the photons' uniform numbers come from.
+    pub sampling: Sampling,
+    /// Which exit lobes are scored in expectation ([`super::lobe`]).
+    pub expected_exits: ExpectedExits,
     pub precision: Precision,
     /// Mantissa bits kept (bit rounding; the type's full width is lossless).
     pub keep_bits: u32,
@@ -78,6 +117,8 @@ impl Default for BakeSettings {
             split: 1,
             exit_draws: 1,
             batch: 4096,
+            sampling: Sampling::Random,
+            expected_exits: ExpectedExits::None,
             precision: Precision::F16,
             keep_bits: 10,
             channels: ChannelKind::Rgb,
@@ -216,6 +257,13 @@ pub fn unit_len(n_wi: usize) -> usize {
     n_wi.div_ceil(48).max(4)
 }
 
+/// Photons per launch of the first-reflection pass ([`ExpectedExits::All`]): the reflection
+/// lobe depends on the launch alone (incidence within the bin, offset), a smooth function of
+/// three numbers, so a 64th of the photons' launches evaluate it with noise far below theirs
+/// (measured on silk at 2°: 64, 1,024 and 4,096 launches per 4,096-photon batch give the same
+/// noise, 5.86 %, 5.83 %, 5.82 %).
+const FIRST_REFLECTION_SHARE: u64 = 64;
+
 /// Batches traced before their tallies are merged (bounds memory for wide sweeps).
 const GROUP: u64 = 16;
 
@@ -233,7 +281,11 @@ pub fn trace_slice(
 ) -> Result<SliceResult, Cancelled> {
     let start = Instant::now();
     let job = SliceJob {
-        setup: Setup::new(fiber, inc),
+        setup: Setup::new(fiber, inc).with_expected_exits(
+            *grid,
+            s.expected_exits.inside(),
+            s.expected_exits.first_reflection(),
+        ),
         inc,
         grid,
         channels,
@@ -294,37 +346,79 @@ impl SliceJob<'_> {
         let (grid, channels, s) = (self.grid, self.channels, self.s);
         let nch = channels.len();
         let mut rng = batch_rng(self.seed, b);
-        let mut local = vec![0.0; grid.bins() * nch];
-        let mut row = vec![0.0; nch];
-        let mut last = f64::NAN;
+        let mut sc = ChannelScore {
+            local: vec![0.0; grid.bins() * nch],
+            row: vec![0.0; nch],
+            last: f64::NAN,
+            channels,
+            grid: *grid,
+            phi_i: self.inc.phi_rad,
+        };
         let (mut h, mut l, mut gsum) = (0u64, 0.0, 0.0);
         let n = s.batch;
+        let scramble = (s.sampling == Sampling::Sobol).then(|| Scramble::draw(&mut rng));
         for j in 0..n {
-            let off = (j as f64 + uniform(rng.next_u64())) / n as f64;
-            let st = self
-                .setup
-                .photon(&mut rng, Some(off), s.draws(), &mut |dir, path, w| {
-                    if path != last {
-                        row.iter_mut().for_each(|x| *x = 0.0);
-                        channels.add_weighted(path, 1.0, &mut row);
-                        last = path;
-                    }
-                    let bin = grid.bin(dir, self.inc.phi_rad) as usize;
-                    for (o, r) in local[bin * nch..(bin + 1) * nch].iter_mut().zip(&row) {
-                        *o += w * r;
-                    }
-                });
+            let (mut u, off) = match &scramble {
+                Some(sc) => (PathSampler::sobol(&mut rng, sc, j as u32), None),
+                None => {
+                    let off = (j as f64 + uniform(rng.next_u64())) / n as f64;
+                    (PathSampler::random(&mut rng), Some(off))
+                }
+            };
+            let st = self.setup.photon(&mut u, off, s.draws(), &mut sc);
             h += st.hit as u64;
             if st.hit {
                 gsum += st.g;
             }
             l += st.lost;
         }
+        // The first-reflection pass: launches of its own, each scoring the first event's
+        // reflection lobe in expectation for the batch's n photons.
+        let m_r = (n / FIRST_REFLECTION_SHARE).max(16);
+        for k in 0..m_r {
+            let off = (k as f64 + uniform(rng.next_u64())) / m_r as f64;
+            let mut u = PathSampler::random(&mut rng);
+            self.setup
+                .first_reflection(&mut u, Some(off), n as f64 / m_r as f64, &mut sc);
+        }
         BatchScore {
-            local,
+            local: sc.local,
             hits: h,
             lost: l,
             g_sum: gsum,
+        }
+    }
+}
+
+/// One batch's scores: weight per bin and channel, each exit weighted by every channel's
+/// attenuation over its path ([`Channels::add_weighted`], evaluated once per path length).
+struct ChannelScore<'a> {
+    local: Vec<f64>,
+    row: Vec<f64>,
+    last: f64,
+    channels: &'a Channels,
+    grid: AngularGrid,
+    phi_i: f64,
+}
+
+impl Exits for ChannelScore<'_> {
+    #[inline]
+    fn leave(&mut self, dir: [f64; 3], path_um: f64, w: f64) {
+        let bin = self.grid.bin(dir, self.phi_i);
+        self.leave_bin(bin, path_um, w);
+    }
+
+    #[inline]
+    fn leave_bin(&mut self, bin: u32, path_um: f64, w: f64) {
+        if path_um != self.last {
+            self.row.iter_mut().for_each(|x| *x = 0.0);
+            self.channels.add_weighted(path_um, 1.0, &mut self.row);
+            self.last = path_um;
+        }
+        let nch = self.row.len();
+        let b = bin as usize;
+        for (o, r) in self.local[b * nch..(b + 1) * nch].iter_mut().zip(&self.row) {
+            *o += w * r;
         }
     }
 }

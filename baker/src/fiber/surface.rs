@@ -41,6 +41,10 @@ pub struct Scatter {
     pub transmitted: bool,
     /// True when the V-cavity walk hit its bounce limit and the mean surface was used.
     pub fallback: bool,
+    /// True when the photon left the cavity at the first facet it met (no masking bounce):
+    /// the outcome [`Surface::first_facet_pdf`] describes when it leaves the boundary on the
+    /// side it came from (reflection from outside) or crosses it (transmission from inside).
+    pub first_facet: bool,
 }
 
 #[inline]
@@ -93,8 +97,9 @@ impl Surface {
         let wi = [-d[0], -d[1], -d[2]];
         let mut m = self.sample_visible(wi, nf, &mut u);
         let mut wi = wi;
-        for _ in 0..MAX_CAVITY_BOUNCES {
-            let s = facet([-wi[0], -wi[1], -wi[2]], m, n1, n2, u());
+        for bounce in 0..MAX_CAVITY_BOUNCES {
+            let mut s = facet([-wi[0], -wi[1], -wi[2]], m, n1, n2, u());
+            s.first_facet = bounce == 0;
             if s.transmitted {
                 if dot(s.dir, nf) < 0.0 {
                     return s;
@@ -113,7 +118,72 @@ impl Surface {
         }
         let mut s = facet(d, nf, n1, n2, u());
         s.fallback = true;
+        s.first_facet = false;
         s
+    }
+
+    /// Density per steradian of leaving a rough boundary in direction `wo` at the first facet
+    /// met ([`Scatter::first_facet`]), for a photon travelling along `d` onto the mean normal
+    /// `nf` that faces it: from inside, refraction out through the facet; from outside,
+    /// reflection that the V-cavity does not mask. Zero for a smooth boundary (a delta) and for
+    /// `wo` on the wrong side. This is the sampling process of [`Surface::scatter`] written as
+    /// a density (Walter et al. 2007, Eqs. 14–17 for the half-vector Jacobians):
+    ///
+    /// p(wo) = p_vis(m)·(1 − F(wi·m))·|wo·m|/|η wi + wo|²   (inside, m ∝ η wi + wo)
+    /// p(wo) = p_vis(m)·F(wi·m)·G1(wo, m)/(4|wo·m|)        (outside, m ∝ wi + wo)
+    ///
+    /// with wi = −d and the V-cavity's visible-normal density (Heitz & d'Eon 2014 §5) of the
+    /// facet [`Surface::sample_visible`] picks: m from D(m)(m·n), then m or its mirror m′ in
+    /// proportion to ⟨wi·m⟩ and ⟨wi·m′⟩, so p_vis(m) = 2 D(m)(m·n)⟨wi·m⟩/(⟨wi·m⟩ + ⟨wi·m′⟩).
+    #[inline]
+    pub fn first_facet_pdf(&self, d: [f64; 3], nf: [f64; 3], inside: bool, wo: [f64; 3]) -> f64 {
+        if self.alpha == 0.0 {
+            return 0.0;
+        }
+        let wi = [-d[0], -d[1], -d[2]];
+        let won = dot(wo, nf);
+        let h = if inside {
+            if won >= 0.0 {
+                return 0.0;
+            }
+            axpy(self.eta, wi, wo)
+        } else {
+            if won <= 0.0 {
+                return 0.0;
+            }
+            axpy(1.0, wi, wo)
+        };
+        let h2 = dot(h, h);
+        if h2 <= 0.0 {
+            return 0.0;
+        }
+        let inv = 1.0 / h2.sqrt();
+        let m = [h[0] * inv, h[1] * inv, h[2] * inv];
+        let cos_m = dot(m, nf);
+        let a = dot(wi, m);
+        let wom = dot(wo, m);
+        if cos_m <= 0.0 || a <= 0.0 {
+            return 0.0;
+        }
+        let a2 = (2.0 * cos_m * dot(wi, nf) - a).max(0.0);
+        let c2 = cos_m * cos_m;
+        let tan2 = (1.0 - c2) / c2;
+        let alpha2 = self.alpha * self.alpha;
+        let d_m = (-tan2 / alpha2).exp() / (std::f64::consts::PI * alpha2 * c2 * c2);
+        let p_vis = 2.0 * d_m * cos_m * a / (a + a2);
+        if inside {
+            if wom >= 0.0 {
+                return 0.0;
+            }
+            let (r, _) = fresnel::dielectric(self.eta, 1.0, a);
+            p_vis * (1.0 - r) * (-wom) * inv * inv
+        } else {
+            if wom <= 0.0 {
+                return 0.0;
+            }
+            let (r, _) = fresnel::dielectric(1.0, self.eta, a);
+            p_vis * r * g1_vcavity(wo, m, nf) / (4.0 * wom)
+        }
     }
 
     /// A facet normal of the V-cavity distribution visible from `wi` (Heitz & d'Eon 2014 §5):
@@ -184,6 +254,7 @@ fn facet(d: [f64; 3], m: [f64; 3], n1: f64, n2: f64, u: f64) -> Scatter {
             dir: axpy(2.0 * cos_i, m, d),
             transmitted: false,
             fallback: false,
+            first_facet: true,
         }
     } else {
         let e = n1 / n2;
@@ -197,6 +268,7 @@ fn facet(d: [f64; 3], m: [f64; 3], n1: f64, n2: f64, u: f64) -> Scatter {
             dir: normalize(t),
             transmitted: true,
             fallback: false,
+            first_facet: true,
         }
     }
 }

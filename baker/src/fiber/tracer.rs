@@ -15,12 +15,13 @@
 
 use std::time::Instant;
 
-use rand_core::Rng;
 use rayon::prelude::*;
 
+use super::lobe::{Event, Lobe, LobeGrid};
 use super::tally::DirectionTally;
 use super::{Fiber, Section, Surface};
-use crate::math::rng::{batch_rng, uniform, BatchRng};
+use crate::math::rng::batch_rng;
+use crate::math::sampler::PathSampler;
 use formats::AngularGrid;
 
 /// Photons per batch: one RNG stream and one partial tally each.
@@ -165,8 +166,31 @@ impl Draws {
     }
 }
 
+/// Where the branches that leave a fiber are scored.
+pub(crate) trait Exits {
+    /// Weight `w` leaves along `dir` after `path_um` inside the fiber.
+    fn leave(&mut self, dir: [f64; 3], path_um: f64, w: f64);
+    /// Weight `w` leaves through bin `bin` of the outgoing grid (expected-value scoring,
+    /// [`super::lobe`]).
+    fn leave_bin(&mut self, bin: u32, path_um: f64, w: f64);
+}
+
+/// Expected-value exit scoring ([`super::lobe`]) on the outgoing grid: at events met from
+/// inside (the exit lobes TT, TRT, …) and, by a pass of its own, at the first event (the
+/// reflection lobe R).
+#[derive(Debug, Clone)]
+pub(crate) struct ExpectedExits {
+    pub grid: LobeGrid,
+    pub inside: bool,
+    /// The first event's reflection lobe is scored by a separate pass of launches
+    /// ([`Setup::first_reflection`]), not per photon.
+    pub first_reflection: bool,
+}
+
 /// Per-trace constants.
 pub(crate) struct Setup<'a> {
+    /// Expected-value exit scoring, when on.
+    lobes: Option<ExpectedExits>,
     section: &'a Section,
     inc: Incident,
     s_max: f64,
@@ -219,6 +243,7 @@ impl<'a> Setup<'a> {
         let (lo, hi) = fiber.section.extent(e_perp);
         let rb = fiber.section.bound_radius_um();
         Self {
+            lobes: None,
             section: &fiber.section,
             inc,
 
@@ -237,6 +262,24 @@ impl<'a> Setup<'a> {
         }
     }
 
+    /// Scores first-facet exits in expectation on `grid` (binned from the incident centre's
+    /// azimuth) at events met from inside (`inside`), and leaves the first event's reflection
+    /// lobe to [`Setup::first_reflection`] (`first_reflection`).
+    pub(crate) fn with_expected_exits(
+        mut self,
+        grid: formats::AngularGrid,
+        inside: bool,
+        first_reflection: bool,
+    ) -> Self {
+        let phi_c = self.inc.phi_rad;
+        self.lobes = (inside || first_reflection).then(|| ExpectedExits {
+            grid: LobeGrid::new(grid, phi_c),
+            inside,
+            first_reflection,
+        });
+        self
+    }
+
     /// Width of the launched beam at the centre direction, µm.
     pub(crate) fn beam_width_um(&self) -> f64 {
         self.beam.1 - self.beam.0
@@ -244,17 +287,62 @@ impl<'a> Setup<'a> {
 
     /// One photon of the beam. `offset` places it across the beam (uniform in [0, 1); drawn
     /// when `None`); `draws` splits every boundary event of the photon's main path into that
-    /// many draws ([`Draws`]). `emit(dir, path_um, weight)` receives
-    /// every branch that leaves; the weights include the spread weight.
+    /// many draws ([`Draws`]). Its uniform numbers come from `u` ([`PathSampler`]: launch
+    /// dimensions 0–3, then one block per boundary event of the main path).
+    /// `emit` receives every branch that leaves ([`Exits`]); the weights include the spread
+    /// weight.
     #[inline]
     pub(crate) fn photon(
         &self,
-        rng: &mut BatchRng,
+        u: &mut PathSampler,
         offset: Option<f64>,
         draws: Draws,
-        emit: &mut impl FnMut([f64; 3], f64, f64),
+        emit: &mut impl Exits,
     ) -> PhotonStats {
-        let mut u = || uniform(rng.next_u64());
+        let (ray, g) = self.launch(u, offset);
+        let mut st = self.walk(ray, draws, true, u, emit);
+        st.g = g;
+        st
+    }
+
+    /// The first-event reflection lobe of one launch, scored in expectation with weight
+    /// `scale`·g: the part of [`Setup::photon`]'s score that the photons leave to this pass
+    /// when the setup scores it so ([`ExpectedExits::first_reflection`]). Draws from `u` as a
+    /// launch does, then the quadrature offset.
+    pub(crate) fn first_reflection(
+        &self,
+        u: &mut PathSampler,
+        offset: Option<f64>,
+        scale: f64,
+        emit: &mut impl Exits,
+    ) {
+        let Some(lg) = self.lobes.as_ref().filter(|_| self.first_reflection_pass()) else {
+            return;
+        };
+        let (mut ray, g) = self.launch(u, offset);
+        let Some((n_out, id, _)) = self.advance_straight(&mut ray) else {
+            return;
+        };
+        if !self.leaves_freely(id) {
+            return;
+        }
+        let e = Event {
+            d: ray.dir,
+            nf: n_out,
+            inside: false,
+        };
+        let Some(lobe) = lg.grid.lobe(&self.surface, &e) else {
+            return;
+        };
+        let uv = (u.stream(), u.stream());
+        lg.grid.spread(&lobe, &self.surface, &e, uv, |bin, mass| {
+            emit.leave_bin(bin, 0.0, scale * g * mass)
+        });
+    }
+
+    /// A photon's ray at launch and its spread weight g.
+    #[inline]
+    fn launch(&self, u: &mut PathSampler, offset: Option<f64>) -> (Ray, f64) {
         let (d, dhat, e_perp, beam, g) = match self.inc.spread {
             None => (self.d, self.dhat, self.e_perp, self.beam, 1.0),
             Some((dt, dp)) => {
@@ -263,9 +351,9 @@ impl<'a> Setup<'a> {
                     (self.inc.theta_rad - 0.5 * dt).sin(),
                     (self.inc.theta_rad + 0.5 * dt).sin(),
                 );
-                let st = s0 + (s1 - s0) * u();
+                let st = s0 + (s1 - s0) * u.launch(0);
                 let ct = (1.0 - st * st).max(0.0).sqrt();
-                let phi = self.inc.phi_rad + dp * (u() - 0.5);
+                let phi = self.inc.phi_rad + dp * (u.launch(1) - 0.5);
                 let (sp, cp) = phi.sin_cos();
                 let dhat = [-cp, -sp];
                 let e_perp = [sp, -cp];
@@ -275,13 +363,13 @@ impl<'a> Setup<'a> {
                 ([-ct * cp, -ct * sp, -st], dhat, e_perp, beam, g)
             }
         };
-        let f = offset.unwrap_or_else(&mut u);
+        let f = offset.unwrap_or_else(|| u.launch(2));
         let h = beam.0 + (beam.1 - beam.0) * f;
         let o = [
             h * e_perp[0] - self.r_start * dhat[0],
             h * e_perp[1] - self.r_start * dhat[1],
         ];
-        let z = self.cuticle.map_or(0.0, |c| c.0 * u());
+        let z = self.cuticle.map_or(0.0, |c| c.0 * u.launch(3));
         let ray = Ray {
             p: [o[0], o[1], z],
             dir: d,
@@ -292,18 +380,19 @@ impl<'a> Setup<'a> {
             period: self.cuticle.map_or(0, |c| (z / c.0).floor() as i64),
             w: g,
         };
-        let mut st = self.walk(ray, draws, &mut u, emit);
-        st.g = g;
-        st
+        (ray, g)
     }
 
-    /// Follows a branch until it leaves (emitting it), is lost, or ends in roulette.
+    /// Follows a branch until it leaves (emitting it), is lost, or ends in roulette. The
+    /// photon's main path (`main`) draws each event's numbers from that event's block of
+    /// the sampler; branches split off it draw from the random stream.
     fn walk(
         &self,
         mut ray: Ray,
         draws: Draws,
-        u: &mut impl FnMut() -> f64,
-        emit: &mut impl FnMut([f64; 3], f64, f64),
+        main: bool,
+        u: &mut PathSampler,
+        emit: &mut impl Exits,
     ) -> PhotonStats {
         let mut st = PhotonStats::default();
         loop {
@@ -317,25 +406,54 @@ impl<'a> Setup<'a> {
                     if ray.inside {
                         st.lost += ray.w;
                     } else {
-                        emit(ray.dir, ray.path, ray.w);
+                        emit.leave(ray.dir, ray.path, ray.w);
                     }
                 }
                 return st;
             };
             st.hit = true;
+            if main {
+                u.begin_event(ray.events);
+            } else {
+                u.leave_points();
+            }
             ray.events += 1;
             if ray.events >= MAX_EVENTS {
                 st.lost += ray.w;
                 return st;
             }
             let free = self.leaves_freely(id);
-            let split = draws.at(ray.inside);
+            // Expected-value scoring of the first-facet exit lobe ([`super::lobe`]).
+            let ev = if !free {
+                None
+            } else if main && ray.events == 1 && self.first_reflection_pass() {
+                // Scored by the first-reflection pass ([`Setup::first_reflection`]).
+                let e = Event {
+                    d: ray.dir,
+                    nf: n_out,
+                    inside: false,
+                };
+                self.lobes
+                    .as_ref()
+                    .and_then(|l| l.grid.lobe(&self.surface, &e))
+            } else {
+                self.expected_exits(&ray, n_out, u, emit)
+            };
+            // An event scored in expectation is drawn once: the draw only scores what the
+            // expectation leaves out and picks the continuation.
+            let split = if ev.is_some() {
+                1
+            } else {
+                draws.at(ray.inside)
+            };
             if split <= 1 {
-                let s = self.boundary(ray.dir, n_out, u);
+                let s = self.boundary(ray.dir, n_out, &mut || u.uniform());
                 st.fallbacks += s.1 as u32;
                 if !s.2 && free {
                     // Outward through the convex hull: no ray query needed to know it leaves.
-                    emit(s.0, ray.path, ray.w);
+                    if !self.counted(&ev, &s) {
+                        emit.leave(s.0, ray.path, ray.w);
+                    }
                     return st;
                 }
                 if s.2 != ray.inside {
@@ -355,16 +473,21 @@ impl<'a> Setup<'a> {
             let mut m = 0u32;
             let mut chosen = None;
             let kw = ray.w / split as f64;
-            for _ in 0..split {
-                let s = self.boundary(ray.dir, n_out, u);
+            for k in 0..split {
+                if k > 0 {
+                    u.leave_points();
+                }
+                let s = self.boundary(ray.dir, n_out, &mut || u.uniform());
                 st.fallbacks += s.1 as u32;
                 if s.2 {
                     m += 1;
-                    if m == 1 || u() * (m as f64) < 1.0 {
+                    if m == 1 || u.uniform() * (m as f64) < 1.0 {
                         chosen = Some(s.0);
                     }
                 } else if free {
-                    emit(s.0, ray.path, kw);
+                    if !self.counted(&ev, &s) {
+                        emit.leave(s.0, ray.path, kw);
+                    }
                 } else {
                     let child = Ray {
                         dir: s.0,
@@ -374,11 +497,11 @@ impl<'a> Setup<'a> {
                         period: ray.period + if ray.inside { step } else { 0 },
                         ..ray
                     };
-                    st.add(self.walk(child, Draws::PLAIN, u, emit));
+                    st.add(self.walk(child, Draws::PLAIN, false, u, emit));
                 }
             }
             let Some(d) = chosen else { return st };
-            if m < split && u() * split as f64 >= m as f64 {
+            if m < split && u.uniform() * split as f64 >= m as f64 {
                 return st;
             }
             if !ray.inside {
@@ -387,6 +510,51 @@ impl<'a> Setup<'a> {
             ray.dir = d;
             ray.inside = true;
             ray.skip = id;
+        }
+    }
+
+    /// Scores in expectation the first-facet exits of the event a ray meets from inside at
+    /// the outward normal `n_out` (when the setup scores exits so and the boundary is rough)
+    /// and returns the lobe it covered.
+    #[inline]
+    fn expected_exits(
+        &self,
+        ray: &Ray,
+        n_out: [f64; 3],
+        u: &mut PathSampler,
+        emit: &mut impl Exits,
+    ) -> Option<Lobe> {
+        let lg = self.lobes.as_ref().filter(|l| l.inside)?;
+        if dot3(ray.dir, n_out) <= 0.0 {
+            return None;
+        }
+        let e = Event {
+            d: ray.dir,
+            nf: [-n_out[0], -n_out[1], -n_out[2]],
+            inside: true,
+        };
+        let w = lg.grid.lobe(&self.surface, &e)?;
+        let uv = (u.stream(), u.stream());
+        lg.grid.spread(&w, &self.surface, &e, uv, |bin, mass| {
+            emit.leave_bin(bin, ray.path, ray.w * mass)
+        });
+        Some(w)
+    }
+
+    /// Whether the first event's reflection lobe is left to [`Setup::first_reflection`].
+    #[inline]
+    fn first_reflection_pass(&self) -> bool {
+        self.cuticle.is_none() && self.lobes.as_ref().is_some_and(|l| l.first_reflection)
+    }
+
+    /// Whether the outcome `s` of an event whose first-facet exits were scored in expectation
+    /// over window `ev` is one of them (a first-facet exit into the window), not to be scored
+    /// again.
+    #[inline]
+    fn counted(&self, ev: &Option<Lobe>, s: &([f64; 3], bool, bool, bool)) -> bool {
+        match (ev, &self.lobes) {
+            (Some(w), Some(lg)) => s.3 && lg.grid.covers(w, s.0),
+            _ => false,
         }
     }
 
@@ -412,7 +580,8 @@ impl<'a> Setup<'a> {
     }
 
     /// A boundary event at outward normal `n_out`: returns the new direction, whether the
-    /// fallback was used, and whether the photon is now inside. The side is read from the
+    /// fallback was used, whether the photon is now inside, and whether it left the cavity at
+    /// its first facet ([`super::surface::Scatter::first_facet`]). The side is read from the
     /// direction, so a numerical slip cannot desynchronise it.
     #[inline]
     fn boundary(
@@ -420,7 +589,7 @@ impl<'a> Setup<'a> {
         dir: [f64; 3],
         n_out: [f64; 3],
         u: &mut impl FnMut() -> f64,
-    ) -> ([f64; 3], bool, bool) {
+    ) -> ([f64; 3], bool, bool, bool) {
         let from_inside = dot3(dir, n_out) > 0.0;
         let nf = if from_inside {
             [-n_out[0], -n_out[1], -n_out[2]]
@@ -428,7 +597,12 @@ impl<'a> Setup<'a> {
             n_out
         };
         let s = self.surface.scatter(dir, nf, from_inside, &mut *u);
-        (s.dir, s.fallback, from_inside != s.transmitted)
+        (
+            s.dir,
+            s.fallback,
+            from_inside != s.transmitted,
+            s.first_facet,
+        )
     }
 
     /// Moves a ray along a fiber with cuticle scales (see [`super::Cuticle`]) period by period
@@ -554,10 +728,19 @@ fn trace_batch(
     let mut t = DirectionTally::new(o.grid, &o.mua_per_um);
     t.launched = n;
     let grid = o.grid;
+    let mut exits = TallyExits {
+        t: &mut t,
+        grid,
+        phi_i: inc.phi_rad,
+    };
     for _ in 0..n {
-        let st = setup.photon(&mut rng, None, Draws::PLAIN, &mut |dir, path, w| {
-            t.score(grid.bin(dir, inc.phi_rad), path, w)
-        });
+        let st = setup.photon(
+            &mut PathSampler::random(&mut rng),
+            None,
+            Draws::PLAIN,
+            &mut exits,
+        );
+        let t = &mut *exits.t;
         t.fallbacks += st.fallbacks as u64;
         if st.hit {
             t.intercepted += 1;
@@ -567,4 +750,21 @@ fn trace_batch(
         }
     }
     t
+}
+
+/// The plain tracer's scoring: every exit into its bin of a [`DirectionTally`].
+struct TallyExits<'a> {
+    t: &'a mut DirectionTally,
+    grid: formats::AngularGrid,
+    phi_i: f64,
+}
+
+impl Exits for TallyExits<'_> {
+    fn leave(&mut self, dir: [f64; 3], path_um: f64, w: f64) {
+        self.t.score(self.grid.bin(dir, self.phi_i), path_um, w)
+    }
+
+    fn leave_bin(&mut self, bin: u32, path_um: f64, w: f64) {
+        self.t.score(bin, path_um, w)
+    }
 }

@@ -4,3 +4,4 @@
 pub mod fresnel;
 pub mod quadrature;
 pub mod rng;
+pub mod sampler;

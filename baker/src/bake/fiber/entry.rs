@@ -36,6 +36,9 @@ pub struct EntryReport {
     pub photons_per_direction: u64,
     pub split: u32,
     pub exit_draws: u32,
+    /// Expected-value exit scoring and the sampler (`bake.expected_exits`, `bake.sampling`).
+    pub expected_exits: crate::fiber::slices::ExpectedExits,
+    pub sampling: crate::fiber::slices::Sampling,
     /// Adaptive allocation's target (`null`: a fixed count per direction) and cap.
     pub target_rel_se: Option<NoiseTarget>,
     pub max_photons_per_direction: u64,
@@ -293,7 +296,7 @@ pub fn bake_entry(
 fn announce(eb: &EntryBake) {
     let s = &eb.setup;
     eb.job.runner.events.say(format!(
-        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons{} (split {}, exit draws {}), {} variant(s) × {} channel(s)",
+        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons{} (split {}, exit draws {}, expected exits {:?}, sampling {:?}), {} variant(s) × {} channel(s)",
         eb.e.name,
         s.fibers.len(),
         s.sym.describe(),
@@ -314,6 +317,8 @@ fn announce(eb: &EntryBake) {
         },
         eb.st.split,
         eb.st.exit_draws,
+        eb.st.expected_exits,
+        eb.st.sampling,
         s.variants.len(),
         s.channels.per_variant()
     ));
@@ -432,6 +437,7 @@ fn table_metadata(eb: &EntryBake, name: &str, t: usize) -> serde_json::Value {
         "section_variant": (t < ns).then_some(t),
         "symmetry": eb.setup.sym, "photons_per_direction": st.photons_per_direction(),
         "split": st.split, "exit_draws": st.exit_draws,
+        "expected_exits": st.expected_exits, "sampling": st.sampling,
         "target_rel_se": st.target, "max_photons_per_direction": st.max_photons,
         "seed": st.seed, "lambda_nm": st.lambda_nm,
         "channels": st.channels, "quantise_to_se": eb.spec.storage.quantise_to_se,
@@ -640,6 +646,8 @@ fn report(
         photons_per_direction: st.photons_per_direction(),
         split: st.split,
         exit_draws: st.exit_draws,
+        expected_exits: st.expected_exits,
+        sampling: st.sampling,
         target_rel_se: st.target,
         max_photons_per_direction: st.max_photons,
         variants: s.channels.variants.clone(),

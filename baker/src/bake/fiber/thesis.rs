@@ -41,6 +41,8 @@ pub struct ThesisCost {
     pub measured_directions: usize,
     pub split: u32,
     pub exit_draws: u32,
+    pub expected_exits: crate::fiber::slices::ExpectedExits,
+    pub sampling: crate::fiber::slices::Sampling,
     /// Mean over the measured directions.
     pub photons_per_direction: f64,
     pub seconds_per_direction: f64,
@@ -103,6 +105,8 @@ pub fn measure(
         measured_directions: k,
         split: st.split,
         exit_draws: st.exit_draws,
+        expected_exits: st.expected_exits,
+        sampling: st.sampling,
         photons_per_direction: photons / kf,
         seconds_per_direction: secs / kf,
         median_rel_se: noise / kf,

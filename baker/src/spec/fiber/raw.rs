@@ -41,6 +41,14 @@ pub struct RawBake {
     /// Draws per boundary event met from inside the fiber, so every exit lobe is sampled this
     /// many times per photon (a whole number; 1 = plain tracing).
     pub exit_draws: Option<Spanned<f64>>,
+    /// Expected-value exit scoring: `none`; `inside`, where a path leaves through a rough
+    /// boundary from inside (TT, TRT, …) its exit lobe is scored over the outgoing bins in
+    /// expectation instead of one draw; `all`, and the first reflection R too.
+    pub expected_exits: Option<Spanned<String>>,
+    /// Where the photons take their uniform numbers: `random`, or `sobol` (each batch of
+    /// photons one randomised Sobol' point set over the launch and the first boundary
+    /// events).
+    pub sampling: Option<Spanned<String>>,
     /// Adaptive allocation: each incoming direction traces past `photons_per_direction` until
     /// the median relative standard error of its table (over bins with f̂ ≥ 1 % of the
     /// slice's maximum) is at most this: a number in (0, 0.5], or `thesis` for the noise plain

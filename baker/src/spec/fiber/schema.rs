@@ -186,6 +186,11 @@ fn bake(root: &mut Value) {
     bound(prop(b, "quantise_to_se"), super::settings::QUANTISE_TO_SE);
     names(prop(b, "precision"), &keys(&PRECISIONS));
     names(prop(b, "channels"), &keys(&CHANNELS));
+    names(
+        prop(b, "expected_exits"),
+        &keys(&super::settings::EXPECTED_EXITS),
+    );
+    names(prop(b, "sampling"), &keys(&super::settings::SAMPLINGS));
     let most = PRECISIONS.iter().map(|(_, p)| p.mantissa_bits()).max();
     bound(
         prop(b, "keep_bits"),

@@ -4,7 +4,7 @@
 
 use super::raw::{RawBake, RawLambda};
 use super::FiberCx;
-use crate::fiber::slices::{BakeSettings, NoiseTarget};
+use crate::fiber::slices::{BakeSettings, ExpectedExits, NoiseTarget, Sampling};
 use crate::fiber::sweep::ChannelKind;
 use crate::spec::check::{loc, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
@@ -34,6 +34,29 @@ pub(in crate::spec) const CHANNELS: [(&str, ChannelKind); 2] = [
     ("rgb", ChannelKind::Rgb),
     ("spectral", ChannelKind::Spectral),
 ];
+/// `bake.expected_exits`: which exit lobes are scored in expectation (`crate::fiber::lobe`).
+pub const EXPECTED_EXITS: [(&str, ExpectedExits); 3] = [
+    ("none", ExpectedExits::None),
+    ("inside", ExpectedExits::Inside),
+    ("all", ExpectedExits::All),
+];
+/// `bake.sampling`: where the photons take their uniform numbers (`crate::math::sampler`).
+pub const SAMPLINGS: [(&str, Sampling); 2] =
+    [("random", Sampling::Random), ("sobol", Sampling::Sobol)];
+
+/// The value of `word` in a table of choices, or the allowed words (for command-line flags
+/// that override a `bake:` choice).
+pub fn choice_of<T: Copy>(options: &[(&str, T)], word: &str) -> Result<T, String> {
+    options
+        .iter()
+        .find(|(k, _)| *k == word)
+        .map(|(_, t)| *t)
+        .ok_or_else(|| {
+            let allowed: Vec<&str> = options.iter().map(|o| o.0).collect();
+            format!("`{word}` is not one of {}", allowed.join(", "))
+        })
+}
+
 /// `bake.quantise_to_se`: the rounding error allowed per stored value, as a fraction of its
 /// bin's standard error (0 = off; above one the error would exceed the noise).
 pub(in crate::spec) const QUANTISE_TO_SE: Bounds = Bounds::closed(0.0, 1.0);
@@ -97,6 +120,18 @@ impl FiberCx {
             EXIT_DRAWS.hi,
             d.exit_draws as u64,
         ) as u32;
+        let expected_exits = match &b.expected_exits {
+            Some(x) => self
+                .choice("bake.expected_exits", x, &EXPECTED_EXITS)
+                .unwrap_or(d.expected_exits),
+            None => d.expected_exits,
+        };
+        let sampling = match &b.sampling {
+            Some(x) => self
+                .choice("bake.sampling", x, &SAMPLINGS)
+                .unwrap_or(d.sampling),
+            None => d.sampling,
+        };
         let target = b.target_rel_se.as_ref().and_then(|t| self.noise_target(t));
         let max_photons = self.count(
             "bake.max_photons_per_direction",
@@ -130,6 +165,8 @@ impl FiberCx {
             seed,
             split,
             exit_draws,
+            expected_exits,
+            sampling,
             target,
             max_photons,
             precision,

@@ -1,0 +1,404 @@
+//! Expected-value exit scoring: where a path leaves a fiber through a rough boundary, score the
+//! exit lobe's mass over the outgoing bins instead of one sampled direction.
+//!
+//! A rough boundary spreads every exit over a lobe (6–17° Beckmann facets: many 2° bins), and
+//! a plain photon puts all its weight into the one bin its draw lands in. Here, at a boundary
+//! event whose exit leaves the fiber for good ([`super::Section::leaves_freely`]), the part of
+//! the event's outcome that has a density, leaving at the first facet met
+//! ([`super::Surface::first_facet_pdf`]: refraction out from inside, unmasked reflection from
+//! outside), is scored in expectation over a window W of bins around the lobe:
+//!
+//!   E[bin b] = w · ∫_b p(ωo) dωo  for every b ∈ W,
+//!
+//! each integral estimated without bias by the density at one point of the bin, uniform in
+//! solid angle, times the bin's solid angle (one random offset (u, v) per event, shared by the
+//! window's bins: a randomly shifted product rule). The event is then drawn as before and its
+//! outcome scored *unless* it is a first-facet exit landing in W, which the expectation has
+//! already counted; a path that stays goes on unchanged. So for any window the expected score
+//! of every bin is plain tracing's (the window only decides how much is scored in expectation
+//! and how much by the draw), and the path's continuation is plain tracing's draw by draw.
+//!
+//! The window is the bounding box, in (θo, Δφ) bins, of the exits through facets whose slope
+//! is [`WINDOW_SLOPES`]·α in a ring of directions, plus a bin on each side; the Beckmann
+//! slopes are Gaussian, so facets beyond that radius carry exp(−WINDOW_SLOPES²) of the lobe,
+//! which the draw then scores. Windows near a pole span every Δφ; a window larger than
+//! [`MAX_WINDOW_BINS`] is not evaluated (its event is drawn plainly), which bounds the cost.
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+use smallvec::SmallVec;
+
+use super::Surface;
+use formats::AngularGrid;
+
+/// Slope radius of the window's ring, in units of the RMS slope α.
+pub const WINDOW_SLOPES: f64 = 2.0;
+/// Azimuths of the ring.
+const RING: usize = 16;
+/// Largest window evaluated, bins.
+pub const MAX_WINDOW_BINS: usize = 4096;
+
+/// The outgoing grid of one incoming bin, ready to evaluate exit lobes on.
+#[derive(Debug, Clone)]
+pub struct LobeGrid {
+    grid: AngularGrid,
+    /// Azimuth Δφ is measured from, radians.
+    phi_c: f64,
+    res: f64,
+    /// sin of the θ edges, `n_theta + 1`.
+    sin_edges: Vec<f64>,
+}
+
+/// One boundary event: the photon's direction `d`, the mean normal `nf` facing it, and its side.
+#[derive(Debug, Clone, Copy)]
+pub struct Event {
+    pub d: [f64; 3],
+    pub nf: [f64; 3],
+    pub inside: bool,
+}
+
+impl LobeGrid {
+    pub fn new(grid: AngularGrid, phi_c_rad: f64) -> Self {
+        let res = grid.res_deg.to_radians();
+        Self {
+            grid,
+            phi_c: phi_c_rad,
+            res,
+            sin_edges: (0..=grid.n_theta)
+                .map(|i| (-FRAC_PI_2 + i as f64 * res).sin().clamp(-1.0, 1.0))
+                .collect(),
+        }
+    }
+
+    /// The lobe of event `e`: a cone about the exit through the mean normal (reflection from
+    /// outside, refraction from inside) as wide as the exits through facets of slope
+    /// [`WINDOW_SLOPES`]·α, and the bins its bounding box covers. None when the surface is
+    /// smooth, the mean normal reflects the photon back inside (total internal reflection),
+    /// or the window would exceed [`MAX_WINDOW_BINS`].
+    pub fn lobe(&self, s: &Surface, e: &Event) -> Option<Lobe> {
+        if s.alpha == 0.0 {
+            return None;
+        }
+        // Exits through the mean normal and through facets on rings of slope α and
+        // WINDOW_SLOPES·α: the cone's axis is their mean direction, its half-angle reaches the
+        // farthest. Under total internal reflection at the mean normal the exits come from the
+        // tilted facets only (grazing lobes), which the rings still find.
+        let (t, b) = basis(e.nf);
+        let mut exits: SmallVec<[[f64; 3]; 64]> = SmallVec::new();
+        exits.extend(exit_through(s, e, e.nf));
+        for radius in [s.alpha, WINDOW_SLOPES * s.alpha] {
+            for k in 0..RING {
+                let a = TAU * k as f64 / RING as f64;
+                let (sx, sy) = (radius * a.cos(), radius * a.sin());
+                let m = normalize([
+                    e.nf[0] + sx * t[0] + sy * b[0],
+                    e.nf[1] + sx * t[1] + sy * b[1],
+                    e.nf[2] + sx * t[2] + sy * b[2],
+                ]);
+                exits.extend(exit_through(s, e, m));
+            }
+        }
+        if exits.is_empty() {
+            return None;
+        }
+        let sum = exits
+            .iter()
+            .fold([0.0; 3], |a, w| [a[0] + w[0], a[1] + w[1], a[2] + w[2]]);
+        if dot(sum, sum) < 1e-12 {
+            return None;
+        }
+        let axis = normalize(sum);
+        let cos_rho = exits.iter().map(|w| dot(*w, axis)).fold(1.0f64, f64::min);
+        let rho = cos_rho.clamp(-1.0, 1.0).acos();
+        let g = &self.grid;
+        let theta_a = axis[2].clamp(-1.0, 1.0).asin();
+        let phi_a = axis[1].atan2(axis[0]);
+        let it0 = ((theta_a - rho + FRAC_PI_2) / self.res).floor().max(0.0) as usize;
+        let it1 =
+            (((theta_a + rho + FRAC_PI_2) / self.res).floor().max(0.0) as usize).min(g.n_theta - 1);
+        // Per θ row, the columns of the cone's arc: at latitude θ the cone holds the azimuths
+        // with cos(φ − φa) ≥ (cos ρ − sin θ sin θa)/(cos θ cos θa); the widest arc of a row is
+        // at the latitude nearest to the one where the arc is widest, sin θ = sin θa / cos ρ.
+        let (sa, ca) = theta_a.sin_cos();
+        let half_at = |th: f64| -> f64 {
+            let (st, ct) = th.sin_cos();
+            let den = ct * ca;
+            if den <= 1e-12 {
+                return PI;
+            }
+            let x = (cos_rho - st * sa) / den;
+            if x <= -1.0 {
+                PI
+            } else if x >= 1.0 {
+                0.0
+            } else {
+                x.acos()
+            }
+        };
+        let widest = if cos_rho > 0.0 {
+            (sa / cos_rho).clamp(-1.0, 1.0).asin()
+        } else {
+            theta_a
+        };
+        let mut rows = SmallVec::new();
+        let mut bins = 0;
+        for it in it0..=it1 {
+            let lo = -FRAC_PI_2 + it as f64 * self.res;
+            let hi = lo + self.res;
+            let half = half_at(lo)
+                .max(half_at(hi))
+                .max(half_at(widest.clamp(lo, hi)))
+                .max(half_at(theta_a.clamp(lo, hi)));
+            let (jp0, np) = if half >= PI - self.res {
+                (0, g.n_phi)
+            } else {
+                let (_, j_lo) = g.cell(0.0, phi_a - half - self.phi_c);
+                let span = ((2.0 * half) / self.res).floor() as usize + 2;
+                (j_lo, span.min(g.n_phi))
+            };
+            bins += np;
+            rows.push((jp0 as u32, np as u32));
+        }
+        (bins <= MAX_WINDOW_BINS).then_some(Lobe {
+            it0,
+            rows,
+            bins,
+            axis,
+            cos_rho,
+        })
+    }
+
+    /// Whether direction `wo` lies in the cone of `lobe` (what [`LobeGrid::spread`] scores).
+    #[inline]
+    pub fn covers(&self, lobe: &Lobe, wo: [f64; 3]) -> bool {
+        dot(wo, lobe.axis) >= lobe.cos_rho
+    }
+
+    /// Calls `f(bin, mass)` for every bin of the lobe's window with an unbiased estimate of
+    /// the probability of a first-facet exit into the part of the bin inside the cone: the
+    /// density inside the cone at the point (u, v) of the bin (uniform in sin θ and φ) times
+    /// the bin's solid angle.
+    pub fn spread(
+        &self,
+        lobe: &Lobe,
+        s: &Surface,
+        e: &Event,
+        (u, v): (f64, f64),
+        mut f: impl FnMut(u32, f64),
+    ) {
+        let g = &self.grid;
+        let k = 1;
+        let kf = k as f64;
+        let mut cols: SmallVec<[[f64; 2]; 256]> = SmallVec::new();
+        let mut acc: SmallVec<[f64; 256]> = SmallVec::new();
+        for (r, &(jp0, np)) in lobe.rows.iter().enumerate() {
+            let (jp0, np) = (jp0 as usize, np as usize);
+            let it = lobe.it0 + r;
+            cols.clear();
+            for c in 0..np {
+                let jp = (jp0 + c) % g.n_phi;
+                for q in 0..k {
+                    let phi = self.phi_c - PI + (jp as f64 + (q as f64 + v) / kf) * self.res;
+                    let (sp, cp) = phi.sin_cos();
+                    cols.push([cp, sp]);
+                }
+            }
+            let (s0, s1) = (self.sin_edges[it], self.sin_edges[it + 1]);
+            let omega = self.res * (s1 - s0) / (kf * kf);
+            acc.clear();
+            acc.resize(np, 0.0);
+            for q in 0..k {
+                let st = s0 + (q as f64 + u) / kf * (s1 - s0);
+                let ct = (1.0 - st * st).max(0.0).sqrt();
+                for (c, a) in acc.iter_mut().enumerate() {
+                    for cs in &cols[c * k..(c + 1) * k] {
+                        let wo = [ct * cs[0], ct * cs[1], st];
+                        if dot(wo, lobe.axis) >= lobe.cos_rho {
+                            *a += s.first_facet_pdf(e.d, e.nf, e.inside, wo);
+                        }
+                    }
+                }
+            }
+            for (c, a) in acc.iter().enumerate() {
+                if *a > 0.0 {
+                    let jp = (jp0 + c) % g.n_phi;
+                    f((it * g.n_phi + jp) as u32, a * omega);
+                }
+            }
+        }
+    }
+}
+
+/// The first-facet exit lobe of one boundary event: the cone it is scored over in expectation
+/// and the window of bins that holds the cone.
+#[derive(Debug, Clone)]
+pub struct Lobe {
+    /// First θ row, and per row from it the first Δφ column and the number of columns (the
+    /// cone's arc in that row, wrapping at ±180°).
+    pub it0: usize,
+    pub rows: SmallVec<[(u32, u32); 64]>,
+    /// Bins in all rows.
+    pub bins: usize,
+    /// Unit axis of the cone (the exit through the mean normal) and cos of its half-angle.
+    pub axis: [f64; 3],
+    pub cos_rho: f64,
+}
+
+/// The direction a photon of event `e` leaves in at facet `m`, if it leaves there: refracted
+/// out from inside (None under total internal reflection), reflected from outside.
+fn exit_through(s: &Surface, e: &Event, m: [f64; 3]) -> Option<[f64; 3]> {
+    let cos_i = -dot(e.d, m);
+    if cos_i <= 0.0 {
+        return None;
+    }
+    let wo = if e.inside {
+        let eta = s.eta;
+        let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
+        if sin_t2 >= 1.0 {
+            return None;
+        }
+        let cos_t = (1.0 - sin_t2).sqrt();
+        let k = eta * cos_i - cos_t;
+        normalize([
+            eta * e.d[0] + k * m[0],
+            eta * e.d[1] + k * m[1],
+            eta * e.d[2] + k * m[2],
+        ])
+    } else {
+        [
+            e.d[0] + 2.0 * cos_i * m[0],
+            e.d[1] + 2.0 * cos_i * m[1],
+            e.d[2] + 2.0 * cos_i * m[2],
+        ]
+    };
+    let side = dot(wo, e.nf);
+    let leaves = if e.inside { side < 0.0 } else { side > 0.0 };
+    leaves.then_some(wo)
+}
+
+#[inline]
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+fn normalize(v: [f64; 3]) -> [f64; 3] {
+    let k = 1.0 / dot(v, v).sqrt();
+    [v[0] * k, v[1] * k, v[2] * k]
+}
+
+/// Orthonormal basis around unit `n` (Duff et al., JCGT 6(1), 2017).
+fn basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    let s = 1.0f64.copysign(n[2]);
+    let a = -1.0 / (s + n[2]);
+    let b = n[0] * n[1] * a;
+    (
+        [1.0 + s * n[0] * n[0] * a, s * b, -s * n[0]],
+        [b, s + n[1] * n[1] * a, -n[1]],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rng::{batch_rng, uniform};
+    use rand_core::Rng;
+
+    fn in_window(w: &Lobe, g: &AngularGrid, b: usize) -> bool {
+        let (it, jp) = (b / g.n_phi, b % g.n_phi);
+        if it < w.it0 || it >= w.it0 + w.rows.len() {
+            return false;
+        }
+        let (jp0, np) = w.rows[it - w.it0];
+        (jp + g.n_phi - jp0 as usize) % g.n_phi < np as usize
+    }
+
+    /// The density is the sampler's: first-facet exits drawn by `Surface::scatter` land in the
+    /// bins of a 2° grid as the spread masses say (χ² over the window's bins, plus the mass
+    /// outside it), from inside and from outside, at two roughnesses and tilted normals.
+    #[test]
+    fn first_facet_exits_follow_the_spread_masses() {
+        let grid = AngularGrid::new(2.0).unwrap();
+        let lg = LobeGrid::new(grid, 0.3);
+        let mut rng = batch_rng(5, 0);
+        let cases = [
+            (6.5f64, true, [0.8, -0.4, 0.3], [-0.9, 0.3, 0.0]),
+            (6.5, false, [0.5, -0.7, -0.2], [-0.2, 0.98, 0.0]),
+            (15.0, true, [0.1, 0.95, 0.3], [0.0, -1.0, 0.0]),
+            (10.0, false, [-0.6, -0.7, 0.3], [0.8, 0.6, 0.0]),
+        ];
+        for (beta, inside, d, nf) in cases {
+            let s = Surface {
+                eta: 1.56,
+                alpha: beta.to_radians().tan(),
+            };
+            let e = Event {
+                d: normalize(d),
+                nf: normalize(nf),
+                inside,
+            };
+            let lobe = lg.lobe(&s, &e).expect("a lobe");
+            let w = &lobe;
+            let mut expected = vec![0.0; grid.bins()];
+            // The bin integrals by a 16 × 16 midpoint rule over the point (u, v).
+            let k = 16;
+            for i in 0..k * k {
+                let uv = (
+                    ((i / k) as f64 + 0.5) / k as f64,
+                    ((i % k) as f64 + 0.5) / k as f64,
+                );
+                lg.spread(&lobe, &s, &e, uv, |b, m| {
+                    expected[b as usize] += m / (k * k) as f64
+                });
+            }
+            let n = 400_000;
+            let mut observed = vec![0.0; grid.bins()];
+            let mut outside = 0.0;
+            let mut u = || uniform(rng.next_u64());
+            for _ in 0..n {
+                let r = s.scatter(e.d, e.nf, inside, &mut u);
+                let leaves = r.transmitted == inside;
+                if r.first_facet && leaves {
+                    if lg.covers(&lobe, r.dir) {
+                        let b = grid.bin(r.dir, 0.3) as usize;
+                        assert!(in_window(w, &grid, b), "a covered exit outside the window");
+                        observed[b] += 1.0;
+                    } else {
+                        outside += 1.0;
+                    }
+                }
+            }
+            let (mut obs, mut exp) = (vec![outside], vec![0.0]);
+            let total: f64 = expected.iter().sum();
+            // Bins of the window with enough expected counts; the rest pooled.
+            let (mut po, mut pe) = (0.0, 0.0);
+            for b in 0..grid.bins() {
+                if !in_window(w, &grid, b) {
+                    continue;
+                }
+                let x = expected[b] * n as f64;
+                if x >= 20.0 {
+                    obs.push(observed[b]);
+                    exp.push(x);
+                } else {
+                    po += observed[b];
+                    pe += x;
+                }
+            }
+            obs.push(po);
+            exp.push(pe);
+            // The mass outside the window is what the first-facet exits leave beyond it:
+            // the observed rate itself (it is not known in closed form), so it adds no χ²
+            // term; the window's total must match the observed window fraction.
+            exp[0] = outside;
+            let labels: Vec<f64> = (0..obs.len()).map(|i| i as f64).collect();
+            crate::stats::chi2::chi2_test_bins(
+                &obs,
+                &exp,
+                &labels,
+                &format!("first_facet_lobe_{beta}_{inside}"),
+            );
+            assert!(total > 0.02 && w.bins > 9, "window {w:?} holds {total}");
+        }
+    }
+}
