@@ -37,6 +37,8 @@ pub enum ChannelKind {
     Spectral,
 }
 
+/// μa·ℓ beyond which a term of a channel is dropped (exp(−50) < 2⁻⁷²).
+const NEGLIGIBLE_MU_L: f64 = 50.0;
 /// Largest number of ℓ grid points of the table.
 const MAX_TABLE: usize = 8192;
 /// Interpolation step in units of 1/μa,max.
@@ -165,10 +167,23 @@ impl Channels {
     }
 }
 
+/// Σ c·exp(−μa·ℓ) over a channel's terms. A term with μa·ℓ > [`NEGLIGIBLE_MU_L`] is below
+/// 2⁻⁷² of its coefficient, far under any stored precision (f32 keeps 24 bits of the channel's
+/// value), and is skipped without calling exp: the paths beyond the table (long internal
+/// trapping in a deep sweep) would otherwise evaluate every term.
 fn exact(terms: &[(f64, f64)], l: f64) -> f64 {
     terms
         .iter()
-        .map(|&(m, c)| if m == 0.0 { c } else { c * (-m * l).exp() })
+        .map(|&(m, c)| {
+            let x = m * l;
+            if x == 0.0 {
+                c
+            } else if x > NEGLIGIBLE_MU_L {
+                0.0
+            } else {
+                c * (-x).exp()
+            }
+        })
         .sum()
 }
 

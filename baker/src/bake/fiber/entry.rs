@@ -456,61 +456,93 @@ fn trace_into(eb: &EntryBake, outs: &mut [TableOut], tallies: &mut Tallies) -> a
     r
 }
 
-/// [`trace_into`]'s loop over the units, reporting to `phase`.
+/// [`trace_into`]'s loop over the units, reporting to `phase`. Encoding and writing a unit's
+/// tables runs on a thread of its own while the next unit traces (a wide sweep's tables take
+/// a while to compress, and the writer is serial): at most two units' results are held (the
+/// budget counts three, [`crate::spec::budget`]), and the tables are written in unit order.
 fn trace_units(
     eb: &EntryBake,
     phase: &crate::pipeline::Phase,
     outs: &mut [TableOut],
     tallies: &mut Tallies,
 ) -> anyhow::Result<()> {
-    let (s, runner) = (&eb.setup, eb.job.runner);
-    let n_wi = s.stored.len();
-    let bins = s.grid.bins();
-    let clip = (eb.st.channels == ChannelKind::Rgb).then(|| {
-        GamutClip::new(
-            &eb.st.lambda_nm,
-            eb.e.variants.iter().map(Option::is_none).collect(),
-        )
-    });
+    let n_wi = eb.setup.stored.len();
     let all: Vec<usize> = (0..n_wi).collect();
-    for (u, chunk) in all.chunks(unit_len(n_wi)).enumerate() {
-        let results = eb
-            .unit_results(u, chunk, Some(phase))?
-            .ok_or_else(|| anyhow::anyhow!("unit {} of {} is not available", u, eb.e.name))?;
-        for (&i, res) in chunk.iter().zip(results) {
-            // Encoding and writing a direction of a wide sweep takes a while: a signal
-            // stops here too (the HDF5 file being written is dropped).
-            runner.cancel.check()?;
-            tallies
-                .photons
-                .push(res.iter().map(|r| r.launched).sum::<u64>());
-            tallies.noise.0 += res[0].noise.median_rel_se;
-            tallies.noise.1 += res[0].noise.p90_rel_se;
-            tallies.noise.2 += res[0].noise.bins as f64;
-            tallies.thesis_noise += res[0].noise.thesis_rel_se;
-            tallies.at_target += usize::from(eb.st.target.is_none_or(|t| t.met_by(&res[0].noise)));
-            let mut all = with_average(eb, s.stored[i], res);
-            let mut factors = Vec::new();
-            for (t, (o, r)) in outs.iter_mut().zip(&mut all).enumerate() {
-                if let Some(clip) = &clip {
-                    let f = clip.apply(r, bins).with_context(|| {
-                        format!(
-                            "{}, table {}, stored incoming direction {i} (bin {})",
-                            eb.e.name, o.name, s.stored[i]
-                        )
-                    })?;
-                    tallies.clip[t].add(&f);
-                    factors.extend(f);
-                }
-                o.push(i, r, &s.grid)?;
-                // As stored (f32).
-                for (range, &a) in tallies.albedo.iter_mut().zip(&r.albedo) {
-                    let a = f64::from(a as f32);
-                    *range = (range.0.min(a), range.1.max(a));
-                }
+    std::thread::scope(|scope| -> anyhow::Result<()> {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<(&[usize], Vec<Vec<bake::SliceResult>>)>(0);
+        let writer = scope.spawn(move || -> anyhow::Result<()> {
+            let clip = (eb.st.channels == ChannelKind::Rgb).then(|| {
+                GamutClip::new(
+                    &eb.st.lambda_nm,
+                    eb.e.variants.iter().map(Option::is_none).collect(),
+                )
+            });
+            for (chunk, results) in rx {
+                write_unit(eb, chunk, results, clip.as_ref(), outs, tallies)?;
             }
-            tallies.clip_entry.add(&factors);
+            Ok(())
+        });
+        for (u, chunk) in all.chunks(unit_len(n_wi)).enumerate() {
+            let results = eb
+                .unit_results(u, chunk, Some(phase))?
+                .ok_or_else(|| anyhow::anyhow!("unit {} of {} is not available", u, eb.e.name))?;
+            if tx.send((chunk, results)).is_err() {
+                // The writer stopped with an error: it tells which below.
+                break;
+            }
         }
+        drop(tx);
+        writer
+            .join()
+            .unwrap_or_else(|p| std::panic::resume_unwind(p))
+    })
+}
+
+/// Pushes the stored directions `chunk` of one unit (`results`: per direction, its sections'
+/// slices) into the tables, after the RGB gamut mapping, and adds them to the tallies.
+fn write_unit(
+    eb: &EntryBake,
+    chunk: &[usize],
+    results: Vec<Vec<bake::SliceResult>>,
+    clip: Option<&GamutClip>,
+    outs: &mut [TableOut],
+    tallies: &mut Tallies,
+) -> anyhow::Result<()> {
+    let (s, runner) = (&eb.setup, eb.job.runner);
+    let bins = s.grid.bins();
+    for (&i, res) in chunk.iter().zip(results) {
+        // Encoding and writing a direction of a wide sweep takes a while: a signal
+        // stops here too (the HDF5 file being written is dropped).
+        runner.cancel.check()?;
+        tallies
+            .photons
+            .push(res.iter().map(|r| r.launched).sum::<u64>());
+        tallies.noise.0 += res[0].noise.median_rel_se;
+        tallies.noise.1 += res[0].noise.p90_rel_se;
+        tallies.noise.2 += res[0].noise.bins as f64;
+        tallies.thesis_noise += res[0].noise.thesis_rel_se;
+        tallies.at_target += usize::from(eb.st.target.is_none_or(|t| t.met_by(&res[0].noise)));
+        let mut all = with_average(eb, s.stored[i], res);
+        let mut factors = Vec::new();
+        for (t, (o, r)) in outs.iter_mut().zip(&mut all).enumerate() {
+            if let Some(clip) = clip {
+                let f = clip.apply(r, bins).with_context(|| {
+                    format!(
+                        "{}, table {}, stored incoming direction {i} (bin {})",
+                        eb.e.name, o.name, s.stored[i]
+                    )
+                })?;
+                tallies.clip[t].add(&f);
+                factors.extend(f);
+            }
+            o.push(i, r, &s.grid)?;
+            // As stored (f32).
+            for (range, &a) in tallies.albedo.iter_mut().zip(&r.albedo) {
+                let a = f64::from(a as f32);
+                *range = (range.0.min(a), range.1.max(a));
+            }
+        }
+        tallies.clip_entry.add(&factors);
     }
     Ok(())
 }

@@ -528,10 +528,17 @@ mod tests {
             square.extend([[t, 0.0], [1.0, t], [1.0 - t, 1.0], [0.0, 1.0 - t]]);
         }
         square.sort_by(|a, b| {
-            (a[1] - 0.5).atan2(a[0] - 0.5).total_cmp(&(b[1] - 0.5).atan2(b[0] - 0.5))
+            (a[1] - 0.5)
+                .atan2(a[0] - 0.5)
+                .total_cmp(&(b[1] - 0.5).atan2(b[0] - 0.5))
         });
         let mut polys = vec![Polygon::new(square, vec![]).unwrap()];
-        for shape in [Shape::Silk, Shape::CottonRaw, Shape::CottonMercerised, Shape::Trilobal] {
+        for shape in [
+            Shape::Silk,
+            Shape::CottonRaw,
+            Shape::CottonMercerised,
+            Shape::Trilobal,
+        ] {
             for v in 0..3 {
                 if let crate::fiber::Section::Polygon(p) = generate(shape, 12.0, 1, v).unwrap() {
                     polys.push(p);
@@ -544,10 +551,13 @@ mod tests {
             for k in 0..3600 {
                 let a = std::f64::consts::TAU * k as f64 / 3600.0;
                 let e = [a.cos(), a.sin()];
-                let brute = p.outer.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, v| {
-                    let x = v[0] * e[0] + v[1] * e[1];
-                    (r.0.min(x), r.1.max(x))
-                });
+                let brute = p
+                    .outer
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |r, v| {
+                        let x = v[0] * e[0] + v[1] * e[1];
+                        (r.0.min(x), r.1.max(x))
+                    });
                 assert_eq!(p.extent(e), brute, "direction {a}");
             }
         }
