@@ -25,6 +25,19 @@ pub struct EdgeHit {
     pub c: f64,
 }
 
+/// The convex hull of an outline, for its extent along any direction.
+#[derive(Debug, Clone)]
+struct Hull {
+    /// Its vertices (counter-clockwise, collinear ones kept): the only ones an extent along
+    /// any direction can come from.
+    vertices: Vec<[f64; 2]>,
+    /// Per hull edge (from `vertices[i]` to `vertices[i + 1]`), the azimuth of its outward
+    /// normal, with the edge index, sorted by azimuth: the vertex where v·e is largest sits
+    /// between the edges whose normals bracket e's azimuth, so [`Polygon::extent`] (once per
+    /// photon of a bake, whose incidence varies within its bin) finds it by bisection.
+    normal_az: Vec<(f64, u32)>,
+}
+
 /// A closed outline (counter-clockwise) with holes (clockwise), in micrometres.
 #[derive(Debug, Clone)]
 pub struct Polygon {
@@ -34,14 +47,8 @@ pub struct Polygon {
     /// Per edge: it lies on the convex hull of the outline (every vertex is on its inner
     /// side), so a ray leaving outward through it never meets the section again.
     on_hull: Vec<bool>,
-    /// The vertices of the outer loop's convex hull (counter-clockwise, collinear ones kept):
-    /// the only ones an extent along any direction can come from.
-    hull: Vec<[f64; 2]>,
-    /// Per hull edge (from `hull[i]` to `hull[i + 1]`), the azimuth of its outward normal,
-    /// with the edge index, sorted by azimuth: the vertex where v·e is largest sits between
-    /// the edges whose normals bracket e's azimuth, so [`Polygon::extent`] (once per photon of
-    /// a bake, whose incidence varies within its bin) finds it by bisection.
-    normal_az: Vec<(f64, u32)>,
+    /// The outer loop's convex hull, for extents ([`Polygon::extent`]).
+    hull: Box<Hull>,
     grid: SegmentGrid,
 }
 
@@ -231,8 +238,10 @@ impl Polygon {
             holes,
             edges,
             on_hull,
-            hull,
-            normal_az,
+            hull: Box::new(Hull {
+                vertices: hull,
+                normal_az,
+            }),
             grid,
         }
     }
@@ -376,22 +385,22 @@ impl Polygon {
     /// outward normals bracket e's azimuth (found by bisection), or, where rounding makes a
     /// neighbour tie, at one of its neighbours; all three are compared.
     fn support(&self, e: [f64; 2]) -> f64 {
-        let n = self.hull.len();
+        let (hull, normal_az) = (&self.hull.vertices, &self.hull.normal_az);
+        let n = hull.len();
         if n <= 8 {
-            return self
-                .hull
+            return hull
                 .iter()
                 .map(|v| v[0] * e[0] + v[1] * e[1])
                 .fold(f64::NEG_INFINITY, f64::max);
         }
         let az = e[1].atan2(e[0]);
         // The first edge whose normal azimuth is ≥ e's (wrapping): its start vertex.
-        let k = self.normal_az.partition_point(|x| x.0 < az) % self.normal_az.len();
-        let i = self.normal_az[k].1 as usize;
+        let k = normal_az.partition_point(|x| x.0 < az) % normal_az.len();
+        let i = normal_az[k].1 as usize;
         [i + n - 1, i, i + 1]
             .iter()
             .map(|&j| {
-                let v = self.hull[j % n];
+                let v = hull[j % n];
                 v[0] * e[0] + v[1] * e[1]
             })
             .fold(f64::NEG_INFINITY, f64::max)
@@ -547,7 +556,11 @@ mod tests {
         }
         assert!(polys.len() > 5);
         for p in &polys {
-            eprintln!("hull {} of {} vertices", p.hull.len(), p.outer.len());
+            eprintln!(
+                "hull {} of {} vertices",
+                p.hull.vertices.len(),
+                p.outer.len()
+            );
             for k in 0..3600 {
                 let a = std::f64::consts::TAU * k as f64 / 3600.0;
                 let e = [a.cos(), a.sin()];
