@@ -17,6 +17,17 @@
 //!   gets k samples per photon where plain tracing gets one, while the path lives as long as
 //!   a plain photon's. Exits through an edge on the convex hull are scored without a ray
 //!   query ([`super::Section::leaves_freely`]).
+//! - **Expected-value exit scoring** (`expected_exits: inside | all`, [`super::lobe`]): at an
+//!   event met from inside whose exits leave the fiber for good, the exit lobe's first-facet
+//!   part (a density: [`super::Surface::first_facet_pdf`]) is scored over a cone of bins in
+//!   expectation, and the event is drawn once for the rest (other exits, the continuation).
+//!   `all` also scores the first event's reflection lobe R in expectation, by a pass of its
+//!   own launches (a 64th of the photons': R depends on the launch alone). Events it covers
+//!   are not split.
+//! - **Randomised Sobol' points** (`sampling: sobol`, [`crate::math::sampler`]): each batch one
+//!   scrambled and shifted Sobol' point set over the launch (incidence within the bin, entry
+//!   offset) and the first boundary events of every photon; each photon is exactly uniform,
+//!   so every estimate stays unbiased, and batches stay independent for the errors.
 //! - **Adaptive allocation** (`target_rel_se`, `max_photons_per_direction`): after the first
 //!   `photons_per_direction`, groups of batches follow until the slice's median relative
 //!   error reaches the target ([`NoiseTarget`]) or the cap. The check sees the batches merged
