@@ -316,10 +316,12 @@ fn estimators_agree_with_plain_tracing() {
     );
     let mean_z2 = all_z2.0 / all_z2.1 as f64;
     eprintln!(
-        "estimators vs plain: {} sets, {} bins, mean z² {mean_z2:.3}; albedo max |z| {:.2} (threshold {z_max:.2})",
+        "estimators vs plain: {} sets, {} bins, mean z² {mean_z2:.3}; albedo max |z| {:.2} (threshold {z_max:.2}), {} of {} beyond 3",
         sets.len(),
         all_z2.1,
-        worst.0.abs()
+        worst.0.abs(),
+        albedo_z.iter().filter(|z| z.0.abs() > 3.0).count(),
+        albedo_z.len()
     );
     // Batch-means errors from 128 batches scatter; the mean of z² stays near 1 unless a bias
     // or a wrong error estimate moves it.

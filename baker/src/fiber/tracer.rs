@@ -424,20 +424,10 @@ impl<'a> Setup<'a> {
             }
             let free = self.leaves_freely(id);
             // Expected-value scoring of the first-facet exit lobe ([`super::lobe`]).
-            let ev = if !free {
-                None
-            } else if main && ray.events == 1 && self.first_reflection_pass() {
-                // Scored by the first-reflection pass ([`Setup::first_reflection`]).
-                let e = Event {
-                    d: ray.dir,
-                    nf: n_out,
-                    inside: false,
-                };
-                self.lobes
-                    .as_ref()
-                    .and_then(|l| l.grid.lobe(&self.surface, &e))
+            let ev = if free {
+                self.expected(&ray, n_out, main, u, emit)
             } else {
-                self.expected_exits(&ray, n_out, u, emit)
+                None
             };
             // An event scored in expectation is drawn once: the draw only scores what the
             // expectation leaves out and picks the continuation.
@@ -510,6 +500,32 @@ impl<'a> Setup<'a> {
             ray.dir = d;
             ray.inside = true;
             ray.skip = id;
+        }
+    }
+
+    /// The lobe of a freely leaving event that is scored in expectation: the first event's
+    /// reflection, scored by the first-reflection pass ([`Setup::first_reflection`]), or an
+    /// exit from inside, scored here ([`Setup::expected_exits`]).
+    #[inline]
+    fn expected(
+        &self,
+        ray: &Ray,
+        n_out: [f64; 3],
+        main: bool,
+        u: &mut PathSampler,
+        emit: &mut impl Exits,
+    ) -> Option<Lobe> {
+        if main && ray.events == 1 && self.first_reflection_pass() {
+            let e = Event {
+                d: ray.dir,
+                nf: n_out,
+                inside: false,
+            };
+            self.lobes
+                .as_ref()
+                .and_then(|l| l.grid.lobe(&self.surface, &e))
+        } else {
+            self.expected_exits(ray, n_out, u, emit)
         }
     }
 
