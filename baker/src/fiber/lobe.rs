@@ -28,6 +28,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use smallvec::SmallVec;
 
+use super::surface::basis;
 use super::Surface;
 use formats::AngularGrid;
 
@@ -285,17 +286,6 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 fn normalize(v: [f64; 3]) -> [f64; 3] {
     let k = 1.0 / dot(v, v).sqrt();
     [v[0] * k, v[1] * k, v[2] * k]
-}
-
-/// Orthonormal basis around unit `n` (Duff et al., JCGT 6(1), 2017).
-fn basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-    let s = 1.0f64.copysign(n[2]);
-    let a = -1.0 / (s + n[2]);
-    let b = n[0] * n[1] * a;
-    (
-        [1.0 + s * n[0] * n[0] * a, s * b, -s * n[0]],
-        [b, s + n[1] * n[1] * a, -n[1]],
-    )
 }
 
 #[cfg(test)]

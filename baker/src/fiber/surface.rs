@@ -65,7 +65,7 @@ fn normalize(v: [f64; 3]) -> [f64; 3] {
 
 /// Orthonormal basis around unit `n` (Duff et al., JCGT 6(1), 2017).
 #[inline]
-fn basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+pub(crate) fn basis(n: [f64; 3]) -> ([f64; 3], [f64; 3]) {
     let s = 1.0f64.copysign(n[2]);
     let a = -1.0 / (s + n[2]);
     let b = n[0] * n[1] * a;
