@@ -133,7 +133,7 @@ impl Surface {
     /// p(wo) = p_vis(m)·F(wi·m)·G1(wo, m)/(4|wo·m|)        (outside, m ∝ wi + wo)
     ///
     /// with wi = −d and the V-cavity's visible-normal density (Heitz & d'Eon 2014 §5) of the
-    /// facet [`Surface::sample_visible`] picks: m from D(m)(m·n), then m or its mirror m′ in
+    /// facet the sampler picks: m from D(m)(m·n), then m or its mirror m′ in
     /// proportion to ⟨wi·m⟩ and ⟨wi·m′⟩, so p_vis(m) = 2 D(m)(m·n)⟨wi·m⟩/(⟨wi·m⟩ + ⟨wi·m′⟩).
     #[inline]
     pub fn first_facet_pdf(&self, d: [f64; 3], nf: [f64; 3], inside: bool, wo: [f64; 3]) -> f64 {
