@@ -28,8 +28,9 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use smallvec::SmallVec;
 
-use super::surface::basis;
+use super::surface::{basis, dot, normalize, reflect, refract};
 use super::Surface;
+use crate::math::fresnel;
 use formats::AngularGrid;
 
 /// Slope radius of the window's ring, in units of the RMS slope α.
@@ -188,42 +189,21 @@ impl LobeGrid {
         mut f: impl FnMut(u32, f64),
     ) {
         let g = &self.grid;
-        let k = 1;
-        let kf = k as f64;
-        let mut cols: SmallVec<[[f64; 2]; 256]> = SmallVec::new();
-        let mut acc: SmallVec<[f64; 256]> = SmallVec::new();
         for (r, &(jp0, np)) in lobe.rows.iter().enumerate() {
-            let (jp0, np) = (jp0 as usize, np as usize);
             let it = lobe.it0 + r;
-            cols.clear();
-            for c in 0..np {
-                let jp = (jp0 + c) % g.n_phi;
-                for q in 0..k {
-                    let phi = self.phi_c - PI + (jp as f64 + (q as f64 + v) / kf) * self.res;
-                    let (sp, cp) = phi.sin_cos();
-                    cols.push([cp, sp]);
-                }
-            }
             let (s0, s1) = (self.sin_edges[it], self.sin_edges[it + 1]);
-            let omega = self.res * (s1 - s0) / (kf * kf);
-            acc.clear();
-            acc.resize(np, 0.0);
-            for q in 0..k {
-                let st = s0 + (q as f64 + u) / kf * (s1 - s0);
-                let ct = (1.0 - st * st).max(0.0).sqrt();
-                for (c, a) in acc.iter_mut().enumerate() {
-                    for cs in &cols[c * k..(c + 1) * k] {
-                        let wo = [ct * cs[0], ct * cs[1], st];
-                        if dot(wo, lobe.axis) >= lobe.cos_rho {
-                            *a += s.first_facet_pdf(e.d, e.nf, e.inside, wo);
-                        }
+            let st = s0 + u * (s1 - s0);
+            let ct = (1.0 - st * st).max(0.0).sqrt();
+            let omega = self.res * (s1 - s0);
+            for c in 0..np as usize {
+                let jp = (jp0 as usize + c) % g.n_phi;
+                let (sp, cp) = (self.phi_c - PI + (jp as f64 + v) * self.res).sin_cos();
+                let wo = [ct * cp, ct * sp, st];
+                if dot(wo, lobe.axis) >= lobe.cos_rho {
+                    let p = s.first_facet_pdf(e.d, e.nf, e.inside, wo);
+                    if p > 0.0 {
+                        f((it * g.n_phi + jp) as u32, p * omega);
                     }
-                }
-            }
-            for (c, a) in acc.iter().enumerate() {
-                if *a > 0.0 {
-                    let jp = (jp0 + c) % g.n_phi;
-                    f((it * g.n_phi + jp) as u32, a * omega);
                 }
             }
         }
@@ -253,39 +233,17 @@ fn exit_through(s: &Surface, e: &Event, m: [f64; 3]) -> Option<[f64; 3]> {
         return None;
     }
     let wo = if e.inside {
-        let eta = s.eta;
-        let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
-        if sin_t2 >= 1.0 {
+        let (r, cos_t) = fresnel::dielectric(s.eta, 1.0, cos_i);
+        if r >= 1.0 {
             return None;
         }
-        let cos_t = (1.0 - sin_t2).sqrt();
-        let k = eta * cos_i - cos_t;
-        normalize([
-            eta * e.d[0] + k * m[0],
-            eta * e.d[1] + k * m[1],
-            eta * e.d[2] + k * m[2],
-        ])
+        refract(e.d, m, s.eta, cos_i, cos_t)
     } else {
-        [
-            e.d[0] + 2.0 * cos_i * m[0],
-            e.d[1] + 2.0 * cos_i * m[1],
-            e.d[2] + 2.0 * cos_i * m[2],
-        ]
+        reflect(e.d, m, cos_i)
     };
     let side = dot(wo, e.nf);
     let leaves = if e.inside { side < 0.0 } else { side > 0.0 };
     leaves.then_some(wo)
-}
-
-#[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-#[inline]
-fn normalize(v: [f64; 3]) -> [f64; 3] {
-    let k = 1.0 / dot(v, v).sqrt();
-    [v[0] * k, v[1] * k, v[2] * k]
 }
 
 #[cfg(test)]

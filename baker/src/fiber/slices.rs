@@ -385,7 +385,11 @@ impl SliceJob<'_> {
         }
         // The first-reflection pass: launches of its own, each scoring the first event's
         // reflection lobe in expectation for the batch's n photons.
-        let m_r = (n / FIRST_REFLECTION_SHARE).max(16);
+        let m_r = if s.expected_exits.first_reflection() {
+            (n / FIRST_REFLECTION_SHARE).max(16)
+        } else {
+            0
+        };
         for k in 0..m_r {
             let off = (k as f64 + uniform(rng.next_u64())) / m_r as f64;
             let mut u = PathSampler::random(&mut rng);

@@ -48,7 +48,7 @@ pub struct Scatter {
 }
 
 #[inline]
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
@@ -58,7 +58,7 @@ fn axpy(a: f64, x: [f64; 3], y: [f64; 3]) -> [f64; 3] {
 }
 
 #[inline]
-fn normalize(v: [f64; 3]) -> [f64; 3] {
+pub(crate) fn normalize(v: [f64; 3]) -> [f64; 3] {
     let k = 1.0 / dot(v, v).sqrt();
     [v[0] * k, v[1] * k, v[2] * k]
 }
@@ -249,28 +249,35 @@ pub fn g1_vcavity(w: [f64; 3], m: [f64; 3], n: [f64; 3]) -> f64 {
 fn facet(d: [f64; 3], m: [f64; 3], n1: f64, n2: f64, u: f64) -> Scatter {
     let cos_i = -dot(d, m);
     let (r, cos_t) = fresnel::dielectric(n1, n2, cos_i);
-    if u < r {
-        Scatter {
-            dir: axpy(2.0 * cos_i, m, d),
-            transmitted: false,
-            fallback: false,
-            first_facet: true,
-        }
-    } else {
-        let e = n1 / n2;
-        // Snell in vector form; renormalised against rounding.
-        let t = [
-            e * d[0] + (e * cos_i - cos_t) * m[0],
-            e * d[1] + (e * cos_i - cos_t) * m[1],
-            e * d[2] + (e * cos_i - cos_t) * m[2],
-        ];
-        Scatter {
-            dir: normalize(t),
-            transmitted: true,
-            fallback: false,
-            first_facet: true,
-        }
+    let transmitted = u >= r;
+    Scatter {
+        dir: if transmitted {
+            refract(d, m, n1 / n2, cos_i, cos_t)
+        } else {
+            reflect(d, m, cos_i)
+        },
+        transmitted,
+        fallback: false,
+        first_facet: true,
     }
+}
+
+/// Direction `d` mirrored at a facet with normal `m` facing it, cos θi = `cos_i` = −d·m.
+#[inline]
+pub(crate) fn reflect(d: [f64; 3], m: [f64; 3], cos_i: f64) -> [f64; 3] {
+    axpy(2.0 * cos_i, m, d)
+}
+
+/// Direction `d` refracted through a facet with normal `m` facing it, relative index
+/// `e` = n1/n2, cos θi = `cos_i`, cos θt = `cos_t` (from [`fresnel::dielectric`]): Snell in
+/// vector form, renormalised against rounding.
+#[inline]
+pub(crate) fn refract(d: [f64; 3], m: [f64; 3], e: f64, cos_i: f64, cos_t: f64) -> [f64; 3] {
+    normalize([
+        e * d[0] + (e * cos_i - cos_t) * m[0],
+        e * d[1] + (e * cos_i - cos_t) * m[1],
+        e * d[2] + (e * cos_i - cos_t) * m[2],
+    ])
 }
 
 #[cfg(test)]

@@ -291,6 +291,20 @@ impl Ctx {
         None
     }
 
+    /// [`Self::choice`] of an optional field: `default` when absent or not one of `options`
+    /// (the error is recorded).
+    pub(super) fn opt_choice<T: Copy>(
+        &mut self,
+        field: &str,
+        v: &Option<Spanned<String>>,
+        options: &[(&str, T)],
+        default: T,
+    ) -> T {
+        v.as_ref()
+            .and_then(|v| self.choice(field, v, options))
+            .unwrap_or(default)
+    }
+
     /// Records that `v` is none of `allowed`: the nearest names ([`crate::suggest`]) and the
     /// list when it is short or `listed_by` is empty (a choice of the spec language), else its
     /// length and `listed_by` (where to see it).

@@ -120,18 +120,13 @@ impl FiberCx {
             EXIT_DRAWS.hi,
             d.exit_draws as u64,
         ) as u32;
-        let expected_exits = match &b.expected_exits {
-            Some(x) => self
-                .choice("bake.expected_exits", x, &EXPECTED_EXITS)
-                .unwrap_or(d.expected_exits),
-            None => d.expected_exits,
-        };
-        let sampling = match &b.sampling {
-            Some(x) => self
-                .choice("bake.sampling", x, &SAMPLINGS)
-                .unwrap_or(d.sampling),
-            None => d.sampling,
-        };
+        let expected_exits = self.opt_choice(
+            "bake.expected_exits",
+            &b.expected_exits,
+            &EXPECTED_EXITS,
+            d.expected_exits,
+        );
+        let sampling = self.opt_choice("bake.sampling", &b.sampling, &SAMPLINGS, d.sampling);
         let target = b.target_rel_se.as_ref().and_then(|t| self.noise_target(t));
         let max_photons = self.count(
             "bake.max_photons_per_direction",
@@ -140,19 +135,9 @@ impl FiberCx {
             MAX_PHOTONS_PER_DIRECTION.hi,
             d.max_photons,
         );
-        let precision = match &b.precision {
-            Some(p) => self
-                .choice("bake.precision", p, &PRECISIONS)
-                .unwrap_or(d.precision),
-            None => d.precision,
-        };
+        let precision = self.opt_choice("bake.precision", &b.precision, &PRECISIONS, d.precision);
         let keep_bits = self.keep_bits(&b.keep_bits, precision);
-        let channels = match &b.channels {
-            Some(c) => self
-                .choice("bake.channels", c, &CHANNELS)
-                .unwrap_or(d.channels),
-            None => d.channels,
-        };
+        let channels = self.opt_choice("bake.channels", &b.channels, &CHANNELS, d.channels);
         let lambda_nm = match &b.lambda_nm {
             Some(l) => self
                 .lambda_nm(&l.value, limits)
