@@ -7,10 +7,16 @@
 //! CIE 1931 observer folded into one weight per wavelength, [`crate::spectral::ColourMap`]).
 //!
 //! Evaluating hundreds of exponentials per exiting photon would cost more than the walk, so
-//! every channel is tabulated once on a uniform grid of ℓ and linearly interpolated (one
-//! fused row of all channels per grid point). With step Δ ≤ 0.02/μa,max the interpolation
-//! error of each exponential is ≤ (μa Δ)²/8 = 5·10⁻⁵ of its value; paths beyond the table
-//! (rare: long internal trapping) are evaluated exactly.
+//! every channel is tabulated once over ℓ and linearly interpolated (one fused row of all
+//! channels per grid point). Linear interpolation of exp(−μa ℓ) over a step Δ errs by at most
+//! (μa Δ)²/8 of its value, so every step keeps μa·Δ ≤ 0.02 (≤ 5·10⁻⁵) for each term that
+//! matters there:
+//! - up to about 16 bounding diameters the grid is uniform with Δ = 0.02/μa,max;
+//! - beyond, it is geometric, Δ = ρ·ℓ with ρ = 0.02/50: a term with μa·ℓ ≤ 50 has
+//!   μa·Δ ≤ 0.02, and one with μa·ℓ > 50 is below e⁻⁵⁰ < 2⁻⁷² of its coefficient at both ends
+//!   of the step (so is its interpolant). Long internal trapping paths (5 % of a dyed silk
+//!   sweep's exits) are thus looked up, not evaluated term by term;
+//! - paths beyond both (a few hundred diameters; the table is bounded) are evaluated exactly.
 //!
 //! Cost: each exiting photon still adds one row of all channels, so a wide sweep costs more
 //! than a single variant (measured: 7 variants × RGB ≈ 1.9× one variant). The alternative
@@ -39,13 +45,17 @@ pub enum ChannelKind {
 
 /// μa·ℓ beyond which a term of a channel is dropped (exp(−50) < 2⁻⁷²).
 const NEGLIGIBLE_MU_L: f64 = 50.0;
-/// Largest number of ℓ grid points of the table.
+/// Largest number of ℓ grid points of each part of the table (uniform, geometric).
 const MAX_TABLE: usize = 8192;
-/// Interpolation step in units of 1/μa,max.
+/// Largest number of values (grid points × channels) of the whole table: 64 MiB of f64.
+const MAX_VALUES: usize = 1 << 23;
+/// Largest μa·Δ of a step for a term that matters (interpolation error ≤ STEP_MU²/8).
 const STEP_MU: f64 = 0.02;
+/// Relative step ρ of the geometric part: STEP_MU / NEGLIGIBLE_MU_L.
+const TAIL_RATIO: f64 = STEP_MU / NEGLIGIBLE_MU_L;
 
 /// All channels of a sweep (variant-major), tabulated over path length.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct Channels {
     pub variants: Vec<String>,
     pub channel_names: Vec<String>,
@@ -56,9 +66,29 @@ pub struct Channels {
     /// ℓ step and its inverse, µm.
     step_um: f64,
     inv_step: f64,
-    /// `(len) × n` values; row i holds every channel at ℓ = i·step.
+    /// `(len + tail.len()) × n` values; row i < len holds every channel at ℓ = i·step, row
+    /// len + j at ℓ = tail[j].
     table: Vec<f64>,
     len: usize,
+    /// ℓ of the geometric part's points, µm: tail[j] = (len − 1)·step·(1 + ρ)^(j + 1).
+    tail: Vec<f64>,
+}
+
+/// What the table is made of (its values follow from these), for cache keys and logs.
+impl std::fmt::Debug for Channels {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Channels")
+            .field("variants", &self.variants)
+            .field("channel_names", &self.channel_names)
+            .field("lambda_nm", &self.lambda_nm)
+            .field("kind", &self.kind)
+            .field("terms", &self.terms)
+            .field("step_um", &self.step_um)
+            .field("len", &self.len)
+            .field("tail_points", &self.tail.len())
+            .field("tail_ratio", &TAIL_RATIO)
+            .finish()
+    }
 }
 
 impl Channels {
@@ -96,22 +126,32 @@ impl Channels {
                 }
             }
         }
-        let mu_max = terms.iter().flatten().map(|t| t.0).fold(0.0f64, f64::max);
-        let (step_um, len) = if mu_max > 0.0 {
-            let step = STEP_MU / mu_max;
-            let len = ((typical_path_um / step).ceil() as usize + 2).clamp(2, MAX_TABLE);
-            (step, len)
-        } else {
-            (typical_path_um.max(1.0), 2)
-        };
+        let absorbing = || terms.iter().flatten().map(|t| t.0).filter(|&m| m > 0.0);
+        let mu_max = absorbing().fold(0.0f64, f64::max);
+        let mu_min = absorbing().fold(f64::INFINITY, f64::min);
         let n = terms.len();
-        let mut table = vec![0.0; len * n];
-        for i in 0..len {
-            let l = i as f64 * step_um;
-            for (c, t) in terms.iter().enumerate() {
-                table[i * n + c] = exact(t, l);
-            }
-        }
+        let rows_max = (MAX_VALUES / n.max(1)).clamp(4, 2 * MAX_TABLE);
+        let (step_um, len, tail) = if mu_max > 0.0 {
+            let step = STEP_MU / mu_max;
+            let len = ((typical_path_um / step).ceil() as usize + 2).clamp(2, rows_max / 2);
+            // Geometric points until every absorbing term is negligible (μa,min·ℓ > 50).
+            let l0 = (len - 1) as f64 * step;
+            let want = ((NEGLIGIBLE_MU_L / mu_min / l0).ln() / TAIL_RATIO.ln_1p()).ceil();
+            let k = (want.max(0.0) as usize + 1)
+                .min(MAX_TABLE)
+                .min(rows_max - len);
+            let tail = (1..=k)
+                .map(|j| l0 * (j as f64 * TAIL_RATIO.ln_1p()).exp())
+                .collect();
+            (step, len, tail)
+        } else {
+            (typical_path_um.max(1.0), 2, Vec::new())
+        };
+        let uniform = (0..len).map(|i| i as f64 * step_um);
+        let table = uniform
+            .chain(tail.iter().copied())
+            .flat_map(|l| terms.iter().map(move |t| exact(t, l)))
+            .collect();
         Self {
             variants: variants.iter().map(|v| v.name.clone()).collect(),
             channel_names: names[..n / variants.len().max(1)].to_vec(),
@@ -122,6 +162,7 @@ impl Channels {
             inv_step: 1.0 / step_um,
             table,
             len,
+            tail,
         }
     }
 
@@ -144,21 +185,47 @@ impl Channels {
     pub fn add_weighted(&self, path_um: f64, w: f64, out: &mut [f64]) {
         let n = self.terms.len();
         let x = path_um * self.inv_step;
-        let i = x as usize;
-        if i + 1 < self.len {
-            let f = x - i as f64;
-            let (a, b) = (
-                &self.table[i * n..(i + 1) * n],
-                &self.table[(i + 1) * n..(i + 2) * n],
-            );
-            for ((o, &a), &b) in out.iter_mut().zip(a).zip(b) {
-                *o += w * (a + f * (b - a));
-            }
+        let (i, f) = if x + 1.0 < self.len as f64 {
+            let i = x as usize;
+            (i, x - i as f64)
+        } else if let Some((j, f)) = self.in_tail(path_um) {
+            (self.len - 1 + j, f)
         } else {
             for (o, t) in out.iter_mut().zip(&self.terms) {
                 *o += w * exact(t, path_um);
             }
+            return;
+        };
+        let (a, b) = (
+            &self.table[i * n..(i + 1) * n],
+            &self.table[(i + 1) * n..(i + 2) * n],
+        );
+        for ((o, &a), &b) in out.iter_mut().zip(a).zip(b) {
+            *o += w * (a + f * (b - a));
         }
+    }
+
+    /// The geometric part's step holding `path_um` (0: from the uniform part's last point to
+    /// tail[0]) and the fraction along it; `None` beyond the table.
+    #[inline]
+    fn in_tail(&self, path_um: f64) -> Option<(usize, f64)> {
+        let l0 = (self.len - 1) as f64 * self.step_um;
+        let last = *self.tail.last()?;
+        if !(path_um >= l0 && path_um < last) {
+            return None;
+        }
+        let at = |j: usize| if j == 0 { l0 } else { self.tail[j - 1] };
+        // ln's rounding can put ℓ one step off; the comparisons settle it.
+        let mut j = ((path_um / l0).ln() / TAIL_RATIO.ln_1p()) as usize;
+        j = j.min(self.tail.len() - 1);
+        while j > 0 && path_um < at(j) {
+            j -= 1;
+        }
+        while path_um >= at(j + 1) {
+            j += 1;
+        }
+        let (a, b) = (at(j), at(j + 1));
+        Some((j, (path_um - a) / (b - a)))
     }
 
     /// Step of the path-length grid, µm.
@@ -204,7 +271,13 @@ mod tests {
         let vars = [v("white", 0.0), v("light", 0.001), v("deep", 0.04)];
         for kind in [ChannelKind::Rgb, ChannelKind::Spectral] {
             let ch = Channels::new(&vars, &lambda, kind, 300.0);
-            for &l in &[0.0, 0.37, 5.0, 42.4, 299.0, 1500.0] {
+            // The uniform part (to 300 µm), the geometric part (to 26 × 300 µm here: its
+            // 8,192 points stop short of the light dye's e⁻⁵⁰), and beyond (exact).
+            assert!(ch.in_tail(299.0).is_none() && ch.in_tail(2.0e5).is_none());
+            assert!(ch.in_tail(300.4).is_some() && ch.in_tail(7.5e3).is_some());
+            for &l in &[
+                0.0, 0.37, 5.0, 42.4, 299.0, 300.4, 1500.0, 7.5e3, 2.0e5, 1e9,
+            ] {
                 let mut got = vec![0.0; ch.len()];
                 ch.add_weighted(l, 2.0, &mut got);
                 for (c, t) in ch.terms.iter().enumerate() {
