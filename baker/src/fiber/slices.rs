@@ -243,13 +243,13 @@ impl SliceResult {
     pub fn normalised(&self, grid: &AngularGrid) -> Vec<f64> {
         let bins = grid.bins();
         let mut out = vec![0.0; self.fraction.len()];
+        let omega: Vec<f64> = (0..grid.n_theta).map(|t| grid.solid_angle(t)).collect();
         for (c, a) in self.albedo.iter().enumerate() {
             if *a <= 0.0 {
                 continue;
             }
             for b in 0..bins {
-                out[c * bins + b] =
-                    self.fraction[c * bins + b] / (a * grid.solid_angle(b / grid.n_phi));
+                out[c * bins + b] = self.fraction[c * bins + b] / (a * omega[b / grid.n_phi]);
             }
         }
         out
