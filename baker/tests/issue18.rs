@@ -8,6 +8,7 @@ mod common;
 use std::path::Path;
 
 use formats::bcsdf::Bcsdf;
+use serde_json::json;
 
 /// Silk dyed with an orange reactive dye (absorbing around 490 nm, where linear sRGB's R
 /// weights are negative): its R channel leaves the gamut above one without the mapping.
@@ -161,6 +162,55 @@ fn issue18_rounding_to_the_noise_shrinks_tables_below_their_noise() {
         }
         let rms = (s2 / n as f64).sqrt();
         assert!(rms > 0.0 && rms < noise, "{t}: RMS {rms}, noise {noise}");
+    }
+}
+
+/// `bake.zstd_level` changes the bytes of a `.bcsdf`, not its values; the manifest records
+/// it (`auto` by default). The HDF5 copy holds f16 values times a power of two: their low 13
+/// mantissa bits are zero in f32 (what lets deflate pack them).
+#[test]
+fn issue18_zstd_level_changes_the_bytes_not_the_values() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fast = common::bake_spec(tmp.path(), "fast", &spec(", zstd_level: 1"), 2);
+    let small = common::bake_spec(tmp.path(), "small", &spec(", zstd_level: 19"), 2);
+    let auto = common::bake_spec(tmp.path(), "auto", &spec(""), 2);
+    for (d, want) in [
+        (&fast, json!(1)),
+        (&small, json!(19)),
+        (&auto, json!("auto")),
+    ] {
+        assert_eq!(
+            manifest(d)["settings"]["zstd_level"],
+            want,
+            "{}",
+            d.display()
+        );
+    }
+    let h = hdf5_metno::File::open(auto.join("silk/silk.h5")).unwrap();
+    for t in TABLES {
+        let path = |d: &Path| d.join(format!("silk/{t}.bcsdf"));
+        let (a, b) = (
+            Bcsdf::open(path(&fast)).unwrap(),
+            Bcsdf::open(path(&small)).unwrap(),
+        );
+        let c = Bcsdf::open(path(&auto)).unwrap();
+        for i in 0..a.dir.n_wi() {
+            let x = a.decode(i).unwrap().values;
+            assert_eq!(x, b.decode(i).unwrap().values, "{t} wi {i}");
+            assert_eq!(x, c.decode(i).unwrap().values, "{t} wi {i}");
+        }
+        let (la, lb) = (
+            std::fs::metadata(path(&fast)).unwrap().len(),
+            std::fs::metadata(path(&small)).unwrap().len(),
+        );
+        assert!(lb < la, "{t}: level 19 {lb} bytes, level 1 {la}");
+        let f5: Vec<f32> = h
+            .dataset(&format!("{t}/f_normalised"))
+            .unwrap()
+            .read_raw()
+            .unwrap();
+        assert!(f5.iter().any(|&v| v > 0.0));
+        assert!(f5.iter().all(|v| v.to_bits() & 0x1FFF == 0), "{t}");
     }
 }
 

@@ -443,6 +443,12 @@ impl Writer {
         Ok(decoded)
     }
 
+    /// The zstd level of the frames pushed from now on (each frame is independent) and of
+    /// the directory.
+    pub fn set_level(&mut self, level: i32) {
+        self.level = level;
+    }
+
     /// The whole file.
     pub fn finish(self) -> Result<Vec<u8>, TableError> {
         self.dir.check()?;

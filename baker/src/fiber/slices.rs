@@ -114,7 +114,6 @@ pub struct BakeSettings {
     pub keep_bits: u32,
     pub channels: ChannelKind,
     pub lambda_nm: Vec<f64>,
-    pub zstd_level: i32,
 }
 
 impl Default for BakeSettings {
@@ -134,7 +133,6 @@ impl Default for BakeSettings {
             keep_bits: 10,
             channels: ChannelKind::Rgb,
             lambda_nm: (0..31).map(|i| 400.0 + 10.0 * i as f64).collect(),
-            zstd_level: 9,
         }
     }
 }

@@ -403,6 +403,7 @@ fn write_tables(
         channels: &s.channels.channel_names,
         phi_centres: &geo.phi_centres,
         quantise_to_se: eb.spec.storage.quantise_to_se,
+        zstd_level: eb.spec.storage.zstd_level,
     };
     let mut outs = Vec::new();
     for (t, name) in geo.table_names.iter().enumerate() {
@@ -441,6 +442,7 @@ fn table_metadata(eb: &EntryBake, name: &str, t: usize) -> serde_json::Value {
         "target_rel_se": st.target, "max_photons_per_direction": st.max_photons,
         "seed": st.seed, "lambda_nm": st.lambda_nm,
         "channels": st.channels, "quantise_to_se": eb.spec.storage.quantise_to_se,
+        "zstd_level": eb.spec.storage.zstd_level,
         "spec_sha256": eb.spec.sha256, "baker_version": env!("CARGO_PKG_VERSION"),
         "created_utc": crate::output::manifest::created_utc(),
     })

@@ -183,6 +183,15 @@ fn bake(root: &mut Value) {
     if let Some(d) = description {
         t["description"] = d;
     }
+    // A zstd level, or the word `auto`.
+    let z = prop(b, "zstd_level");
+    let mut level = json!({ "type": "number" });
+    bound(&mut level, super::settings::ZSTD_LEVEL);
+    let description = z.get("description").cloned();
+    *z = json!({ "anyOf": [level, { "const": "auto" }, { "type": "null" }] });
+    if let Some(d) = description {
+        z["description"] = d;
+    }
     bound(prop(b, "quantise_to_se"), super::settings::QUANTISE_TO_SE);
     names(prop(b, "precision"), &keys(&PRECISIONS));
     names(prop(b, "channels"), &keys(&CHANNELS));

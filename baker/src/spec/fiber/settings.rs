@@ -65,6 +65,27 @@ pub(in crate::spec) const LAMBDA_NM: Bounds = Bounds::closed(360.0, 830.0);
 /// `bake.lambda_nm.step`, nm.
 pub(in crate::spec) const LAMBDA_STEP_NM: Bounds = Bounds::above(0.0, 100.0);
 
+/// `bake.zstd_level` as a number.
+pub(in crate::spec) const ZSTD_LEVEL: Bounds = Bounds::whole(1.0, 22.0);
+
+/// `bake.zstd_level`: the zstd level of the `.bcsdf` frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ZstdLevel {
+    /// Chosen per stored direction from the photons its slice took
+    /// (`crate::bake::fiber::tables::auto_zstd_level`).
+    Auto,
+    Level(i32),
+}
+
+impl serde::Serialize for ZstdLevel {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            ZstdLevel::Auto => s.serialize_str("auto"),
+            ZstdLevel::Level(l) => s.serialize_i32(*l),
+        }
+    }
+}
+
 /// How the tables store the traced values (`bake:` settings that change the tables, not the
 /// traced units).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -72,6 +93,7 @@ pub struct TableStorage {
     /// Each value is rounded to the fewest mantissa bits whose rounding error stays within
     /// this fraction of its bin's standard error (0 = off); `keep_bits` stays the upper bound.
     pub quantise_to_se: f64,
+    pub zstd_level: ZstdLevel,
 }
 
 impl Default for TableStorage {
@@ -80,6 +102,7 @@ impl Default for TableStorage {
         // noise's standard deviation) and frees the bits below it for zstd.
         TableStorage {
             quantise_to_se: 0.25,
+            zstd_level: ZstdLevel::Auto,
         }
     }
 }
@@ -95,6 +118,29 @@ impl FiberCx {
                 QUANTISE_TO_SE,
                 d.quantise_to_se,
             ),
+            zstd_level: match &b.zstd_level {
+                Some(z) => self.zstd_level(z).unwrap_or(d.zstd_level),
+                None => d.zstd_level,
+            },
+        }
+    }
+
+    /// `zstd_level`: `auto` or a whole number in [1, 22].
+    fn zstd_level(&mut self, z: &Spanned<Token>) -> Option<ZstdLevel> {
+        match &z.value {
+            Token::Text(w) if w == "auto" => Some(ZstdLevel::Auto),
+            Token::Number(x) if x.fract() == 0.0 && (ZSTD_LEVEL.lo..=ZSTD_LEVEL.hi).contains(x) => {
+                Some(ZstdLevel::Level(*x as i32))
+            }
+            other => {
+                self.out_of_range(
+                    loc(z),
+                    "bake.zstd_level",
+                    other.to_string(),
+                    "a whole number in [1, 22], or `auto`".into(),
+                );
+                None
+            }
         }
     }
 
