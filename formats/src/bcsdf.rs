@@ -343,11 +343,12 @@ pub fn encode_slice(
 }
 
 /// The scale of a part whose largest value is `max`: the power of two that puts `max` in
-/// [2¹⁴, 2¹⁵). Dividing by it is exact, so a stored value keeps the bits it was rounded to,
-/// and value × scale (what readers and the HDF5 copy hold) keeps f16's zero low mantissa
-/// bits in f32, which deflate packs tightly. It also keeps f16's range: values down to
-/// 2⁻²⁸ of the maximum stay normal (a scale of `max` made them subnormal below 2⁻¹⁴), and
-/// the largest stays below f16's 65,504 after rounding. 1 for an all-zero part.
+/// [½, 1), as a scale of `max` itself would within a factor of two. Dividing by it is exact,
+/// so a stored value keeps the bits it was rounded to, and value × scale (what readers and
+/// the HDF5 copy hold) keeps f16's zero low mantissa bits in f32, which deflate packs
+/// tightly. Values below 2⁻¹⁴ of the scale are f16 subnormals with an absolute step of 2⁻²⁴
+/// of it (at most 1.2·10⁻⁷ of the maximum): far below any bin that carries energy, and
+/// cheaper to store than full relative precision there. 1 for an all-zero part.
 pub fn pow2_scale(max: f64) -> f32 {
     if !(max > 0.0 && max.is_finite()) {
         return 1.0;
@@ -360,7 +361,7 @@ pub fn pow2_scale(max: f64) -> f32 {
         e += 1;
     }
     // f32's normal range bounds the scale (a slice this faint or bright is not physical).
-    2f32.powi((e - 14).clamp(-126, 127))
+    2f32.powi((e + 1).clamp(-126, 127))
 }
 
 fn decode_values(raw: &[u8], dtype: Precision, scales: &[f32], bins: usize) -> Vec<f32> {
@@ -1121,7 +1122,7 @@ mod tests {
     /// Bit rounding in f32 and f16 equals round-to-nearest-even at the kept bits, for every
     /// kept-bit count, on random values and on exact ties; `encode_slice` stores what it says
     /// a reader decodes, byte-shuffled, scaled by a power of two that puts each part's
-    /// maximum in [2¹⁴, 2¹⁵).
+    /// maximum in [½, 1).
     #[test]
     fn bitround_is_round_to_nearest_even() {
         let mut state = 0x9E37_79B9_7F4A_7C15u64;
@@ -1160,7 +1161,7 @@ mod tests {
             let (scales, raw, decoded) = encode_slice(&values, 2, dtype, 6, None);
             for (k, part) in values.chunks(32).enumerate() {
                 let top = part.iter().copied().fold(0.0, f64::max) / scales[k] as f64;
-                assert!((16384.0..32768.0).contains(&top), "{top}");
+                assert!((0.5..1.0).contains(&top), "{top}");
                 assert_eq!(scales[k].to_bits() & 0x007F_FFFF, 0, "a power of two");
             }
             assert_eq!(decode_values(&raw, dtype, &scales, 32), decoded);
@@ -1173,15 +1174,15 @@ mod tests {
         assert_eq!((scales, decoded), (vec![1.0], vec![0.0; 8]));
     }
 
-    /// The scale puts the maximum in [2¹⁴, 2¹⁵) at and around powers of two, and is 1 for
+    /// The scale puts the maximum in [½, 1) at and around powers of two, and is 1 for
     /// parts without a positive finite maximum.
     #[test]
-    fn pow2_scale_puts_the_maximum_below_two_to_the_fifteen() {
+    fn pow2_scale_puts_the_maximum_in_half_to_one() {
         for e in -60..60 {
             let p = 2f64.powi(e);
             for max in [p, p * (1.0 - 1e-15), p * (1.0 + 1e-15), p * 1.5] {
                 let top = max / pow2_scale(max) as f64;
-                assert!((16384.0..32768.0).contains(&top), "{max:e}: {top}");
+                assert!((0.5..1.0).contains(&top), "{max:e}: {top}");
             }
         }
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
@@ -1189,7 +1190,7 @@ mod tests {
         }
     }
 
-    /// Subnormal f16 values (below 2⁻²⁸ of a slice's maximum) keep `keep` bits after their
+    /// Subnormal f16 values (below 6.1e-5 to 1.2e-4 of a slice's maximum) keep `keep` bits after their
     /// own leading one, like normal values: relative error ≤ 2^−(keep+1).
     #[test]
     fn bitround_of_subnormals_keeps_relative_precision() {

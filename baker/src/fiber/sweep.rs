@@ -19,7 +19,9 @@
 //! - paths beyond both (a few hundred diameters; the table is bounded) are evaluated exactly.
 //!
 //! Cost: each exiting photon still adds one row of all channels, so a wide sweep costs more
-//! than a single variant (measured: 7 variants × RGB ≈ 1.9× one variant). The alternative
+//! than a single variant (measured: 20 variants × RGB of silk at 6°, 16,384 photons per
+//! direction, 1.5× the CPU time of one variant; the rest of the difference is writing 20
+//! variants' tables, validation/bench-runs/2026-12-05-fiber-speed). The alternative
 //! not built yet: accumulate a per-bin histogram over ℓ (tent-weighted onto this grid, two
 //! adds per photon whatever the sweep) and multiply it by the channel table at the end —
 //! exactly the same interpolated result, at a cost independent of the number of variants.
