@@ -104,16 +104,22 @@ impl<'a> PathSampler<'a> {
         }
     }
 
-    /// The next uniform number in (0, 1).
-    #[inline]
+    /// The next uniform number in (0, 1). The random stream's path stays inline (plain
+    /// tracing calls this a dozen times per photon); the Sobol' coordinate is a call.
+    #[inline(always)]
     pub fn uniform(&mut self) -> f64 {
-        match self.qmc {
-            Some((s, i)) if self.dim < self.end => {
-                self.dim += 1;
-                s.coordinate(i, self.dim - 1)
+        if self.dim < self.end {
+            if let Some((s, i)) = self.qmc {
+                return self.coordinate(s, i);
             }
-            _ => uniform(self.rng.next_u64()),
         }
+        uniform(self.rng.next_u64())
+    }
+
+    #[inline(never)]
+    fn coordinate(&mut self, s: &Scramble, i: u32) -> f64 {
+        self.dim += 1;
+        s.coordinate(i, self.dim - 1)
     }
 
     /// A number from the random stream, whatever the point set (for draws that are not part
