@@ -353,13 +353,8 @@ pub fn pow2_scale(max: f64) -> f32 {
     if !(max > 0.0 && max.is_finite()) {
         return 1.0;
     }
-    // 2^e ≤ max < 2^(e+1); log2's rounding can be one off at a power of two.
-    let mut e = max.log2().floor() as i32;
-    if 2f64.powi(e) > max {
-        e -= 1;
-    } else if 2f64.powi(e + 1) <= max {
-        e += 1;
-    }
+    // The unbiased exponent e of the f64: 2^e ≤ max < 2^(e+1) (exact, no log2 rounding).
+    let e = ((max.to_bits() >> 52) & 0x7FF) as i32 - 1023;
     // f32's normal range bounds the scale (a slice this faint or bright is not physical).
     2f32.powi((e + 1).clamp(-126, 127))
 }

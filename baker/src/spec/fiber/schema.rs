@@ -161,6 +161,18 @@ fn dyes(root: &mut Value, presets: &[String]) {
     );
 }
 
+/// A field written as a number within `b` or as `word` (or left out), keeping its
+/// description.
+fn number_or_word(p: &mut Value, b: Bounds, word: &str) {
+    let mut number = json!({ "type": "number" });
+    bound(&mut number, b);
+    let description = p.get("description").cloned();
+    *p = json!({ "anyOf": [number, { "const": word }, { "type": "null" }] });
+    if let Some(d) = description {
+        p["description"] = d;
+    }
+}
+
 /// `bake:` (`settings`): keep_bits up to the mantissa bits of the precision, the default's
 /// when none is given.
 fn bake(root: &mut Value) {
@@ -174,24 +186,12 @@ fn bake(root: &mut Value) {
         prop(b, "max_photons_per_direction"),
         super::settings::MAX_PHOTONS_PER_DIRECTION,
     );
-    // A relative standard error, or the word `thesis`.
-    let t = prop(b, "target_rel_se");
-    let mut number = json!({ "type": "number" });
-    bound(&mut number, super::settings::TARGET_REL_SE);
-    let description = t.get("description").cloned();
-    *t = json!({ "anyOf": [number, { "const": "thesis" }, { "type": "null" }] });
-    if let Some(d) = description {
-        t["description"] = d;
-    }
-    // A zstd level, or the word `auto`.
-    let z = prop(b, "zstd_level");
-    let mut level = json!({ "type": "number" });
-    bound(&mut level, super::settings::ZSTD_LEVEL);
-    let description = z.get("description").cloned();
-    *z = json!({ "anyOf": [level, { "const": "auto" }, { "type": "null" }] });
-    if let Some(d) = description {
-        z["description"] = d;
-    }
+    number_or_word(
+        prop(b, "target_rel_se"),
+        super::settings::TARGET_REL_SE,
+        "thesis",
+    );
+    number_or_word(prop(b, "zstd_level"), super::settings::ZSTD_LEVEL, "auto");
     bound(prop(b, "quantise_to_se"), super::settings::QUANTISE_TO_SE);
     names(prop(b, "precision"), &keys(&PRECISIONS));
     names(prop(b, "channels"), &keys(&CHANNELS));
