@@ -304,7 +304,13 @@ pub fn encode_slice(
     let mut raw = vec![0u8; n * size];
     let mut decoded = vec![0f32; n];
     let mut scales = Vec::with_capacity(n_vc);
-    let keep_in = |j: usize| rel_tol.map_or(keep_bits, |t| bits_for_rel_error(t[j]).min(keep_bits));
+    // Per bin, shared by every variant and channel.
+    let keeps: Option<Vec<u32>> = rel_tol.map(|t| {
+        t.iter()
+            .map(|&r| bits_for_rel_error(r).min(keep_bits))
+            .collect()
+    });
+    let keep_in = |j: usize| keeps.as_ref().map_or(keep_bits, |k| k[j]);
     for k in 0..n_vc {
         let part = &values[k * bins..(k + 1) * bins];
         let max = part.iter().copied().fold(0.0, f64::max);
@@ -443,6 +449,11 @@ impl Writer {
     /// the directory.
     pub fn set_level(&mut self, level: i32) {
         self.level = level;
+    }
+
+    /// The zstd level of the next frame (and of the directory, were the file finished now).
+    pub fn level(&self) -> i32 {
+        self.level
     }
 
     /// The whole file.

@@ -11,7 +11,7 @@ use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
 use crate::fiber::slices::{BakeSettings, ExpectedExits, Sampling};
 use crate::fiber::{trace, AngularGrid, Cuticle, Fiber, Incident, Section, Surface, TraceOptions};
-use crate::spec::fiber::FiberEntry;
+use crate::spec::fiber::{FiberEntry, TableStorage};
 
 #[derive(Debug, Subcommand)]
 pub enum FiberCommand {
@@ -52,6 +52,11 @@ pub struct FiberBenchArgs {
     /// With --thesis: stored directions measured per entry (evenly spread).
     #[arg(long, default_value_t = 6, requires = "thesis")]
     pub directions: usize,
+    /// With --thesis: trace each entry's first variant as the spec dyes it (the table a bake
+    /// of the entry stores, reaching the target on that variant) instead of the undyed fiber
+    /// (the thesis's noise is defined on it, and Table 10 times a monochromatic table).
+    #[arg(long, requires = "thesis")]
+    pub dyed: bool,
     /// With --thesis: override the spec's `bake.split` (draws per event met from outside).
     #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=64))]
     pub split: Option<u32>,
@@ -197,7 +202,7 @@ fn bench_cases(a: &FiberBenchArgs) -> anyhow::Result<Vec<(String, Fiber, f64)>> 
         cuticle: None,
     };
     let mut cases = vec![("smooth circle (10 µm, η 1.55)".to_string(), smooth, 0.0)];
-    for (e, _) in spec_entries(&a.specs, &a.entries)? {
+    for (e, _, _) in spec_entries(&a.specs, &a.entries)? {
         cases.push((e.name.clone(), e.fiber(), e.mua_per_um(550.0)));
     }
     Ok(cases)
@@ -208,7 +213,7 @@ fn bench_cases(a: &FiberBenchArgs) -> anyhow::Result<Vec<(String, Fiber, f64)>> 
 fn spec_entries(
     specs: &[PathBuf],
     names: &[String],
-) -> anyhow::Result<Vec<(FiberEntry, BakeSettings)>> {
+) -> anyhow::Result<Vec<(FiberEntry, BakeSettings, TableStorage)>> {
     let mut found = Vec::new();
     let mut chosen = Vec::new();
     for spec in specs {
@@ -217,7 +222,7 @@ fn spec_entries(
         for e in s.fibers {
             found.push(e.name.clone());
             if names.is_empty() || names.contains(&e.name) {
-                chosen.push((e, s.bake.clone()));
+                chosen.push((e, s.bake.clone(), s.storage));
             }
         }
     }
@@ -251,7 +256,7 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     )?;
     writeln!(
         s,
-        "{:<20} {:>6} {:>14} {:>10} {:>11} {:>8} {:>9} {:>11} {:>9} {:>7}",
+        "{:<20} {:>6} {:>14} {:>10} {:>11} {:>8} {:>9} {:>11} {:>9} {:>7} {:>11} {:>9} {:>7}",
         "entry",
         "stored",
         "estimator",
@@ -261,9 +266,12 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
         "thesis",
         "estimated",
         "Table 10",
-        "ratio"
+        "ratio",
+        ".bcsdf",
+        "Table 10",
+        "smaller"
     )?;
-    for (i, (e, st)) in entries.iter().enumerate() {
+    for (i, (e, st, storage)) in entries.iter().enumerate() {
         let st = BakeSettings {
             split: a.split.unwrap_or(st.split),
             exit_draws: a.exit_draws.unwrap_or(st.exit_draws),
@@ -271,12 +279,23 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
             sampling: a.sampling.unwrap_or(st.sampling),
             ..st.clone()
         };
-        let c = thesis::measure(e, &st, a.directions, &crate::cancel::Cancel::NEVER)?;
+        let c = thesis::measure(
+            e,
+            &st,
+            storage,
+            a.dyed,
+            a.directions,
+            &crate::cancel::Cancel::NEVER,
+        )?;
         let t10 = c.table_10_minutes;
         writeln!(
             s,
-            "{:<20} {:>6} {:>14} {:>10.3e} {:>11.2} {:>7.2}% {:>8.2}% {:>9.1} min {:>5} min {:>7}",
-            c.entry,
+            "{:<20} {:>6} {:>14} {:>10.3e} {:>11.2} {:>7.2}% {:>8.2}% {:>9.1} min {:>5} min {:>7} {:>8.2} MB {:>6} MB {:>7}",
+            if a.dyed {
+                format!("{} {}", c.entry, c.variant)
+            } else {
+                c.entry.clone()
+            },
             c.stored_directions,
             estimator_label(c.split, c.exit_draws, c.expected_exits, c.sampling),
             c.photons_per_direction,
@@ -289,6 +308,12 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
                 "{:.2}×",
                 m * 60.0 / c.estimated_seconds
             )),
+            c.estimated_bcsdf_bytes / 1e6,
+            c.table_10_mb.map_or("–".into(), |m| format!("{m}")),
+            c.table_10_mb.map_or("–".into(), |m| format!(
+                "{:.1}×",
+                m * 1e6 / c.estimated_bcsdf_bytes
+            )),
         )?;
         events.emit(json!({"event": "measured", "index": i, "total": entries.len(), "thesis": c}));
         if let Some(b) = &bar {
@@ -300,7 +325,7 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     }
     writeln!(
         s,
-        "ratio: Table 10's time over the estimate (above 1: faster than the thesis). Noise: mean of each slice's median relative standard error (f̂ ≥ 1 % of its maximum); thesis: the same for 16 M plain photons."
+        "ratio: Table 10's time over the estimate (above 1: faster than the thesis). Noise: mean of each slice's median relative standard error (f̂ ≥ 1 % of its maximum); thesis: the same for 16 M plain photons. .bcsdf: one cross-section's file as the spec stores it (precision, channels, quantise_to_se, zstd_level), the measured slices' mean size scaled up; smaller: Table 10's storage (32-bit, one channel) over it."
     )?;
     super::emit_table(&s, a.out.as_deref(), &a.progress)
 }
@@ -508,7 +533,10 @@ fn targets_of(a: &TraceArgs) -> anyhow::Result<Vec<TraceTarget>> {
     let found = spec_entries(&a.specs, &a.entries)?;
     let mut out = Vec::new();
     for name in &a.entries {
-        let (e, bake) = found.iter().find(|(e, _)| &e.name == name).expect("found");
+        let (e, bake, _) = found
+            .iter()
+            .find(|(e, _, _)| &e.name == name)
+            .expect("found");
         let mut st = BakeSettings {
             photons: a.photons.unwrap_or(bake.photons),
             res_deg: a.resolution_deg.unwrap_or(bake.res_deg),

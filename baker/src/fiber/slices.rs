@@ -202,6 +202,22 @@ impl NoiseTarget {
 /// Photons per incoming direction in the thesis (§5.3.2, Table 10's bakes).
 pub const THESIS_PHOTONS: f64 = 16e6;
 
+/// Serde for f64 values that are f32 values: written as f32 (lossless for them).
+mod f32_values {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v.iter().map(|&x| x as f32))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        Ok(Vec::<f32>::deserialize(d)?
+            .into_iter()
+            .map(f64::from)
+            .collect())
+    }
+}
+
 /// Noise of a slice: relative standard error of the sampling density per bin, over bins
 /// whose density exceeds 1 % of the slice's maximum.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -217,7 +233,11 @@ pub struct Noise {
 /// One traced incoming bin.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct SliceResult {
-    /// Fractions of the intercepted power per channel and bin, `[channel][θo][Δφ]`.
+    /// Fractions of the intercepted power per channel and bin, `[channel][θo][Δφ]`: f32
+    /// values (the tables store at most f32, and the noise is orders above its rounding), so
+    /// the unit cache keeps 4 bytes per value (written as f32) and a resumed bake reads back
+    /// exactly what a clean one computes.
+    #[serde(with = "f32_values")]
     pub fraction: Vec<f64>,
     /// Λ(ωi) per channel and its standard error.
     pub albedo: Vec<f64>,
@@ -510,8 +530,15 @@ impl SliceSums {
             self.dphi_s[j] += x;
             self.dphi_s2[j] += x * x;
         }
-        for c in 0..nch {
-            let a = (0..bins).map(|b| local[b * nch + c]).sum::<f64>() / hn;
+        // One pass over the batch, each channel's sum in bin order.
+        let mut alb = vec![0.0; nch];
+        for row in local.chunks_exact(nch) {
+            for (a, x) in alb.iter_mut().zip(row) {
+                *a += x;
+            }
+        }
+        for (c, a) in alb.into_iter().enumerate() {
+            let a = a / hn;
             self.alb_s[c] += a;
             self.alb_s2[c] += a * a;
         }
@@ -525,7 +552,7 @@ impl SliceSums {
         let mut fraction = vec![0.0; nch * bins];
         for b in 0..bins {
             for c in 0..nch {
-                fraction[c * bins + b] = self.sum[b * nch + c] / hn;
+                fraction[c * bins + b] = f64::from((self.sum[b * nch + c] / hn) as f32);
             }
         }
         let albedo: Vec<f64> = (0..nch)

@@ -20,6 +20,25 @@ extern "C" {
     fn H5DSattach_scale(did: hid_t, dsid: hid_t, idx: std::ffi::c_uint) -> i32;
 }
 
+// Direct chunk writes (HDF5 ≥ 1.10.3; hdf5-metno does not wrap them): the chunk arrives
+// already filtered, `filters` = 0 meaning every filter of the dataset's pipeline was applied.
+extern "C" {
+    fn H5Dwrite_chunk(
+        dset_id: hid_t,
+        dxpl_id: hid_t,
+        filters: u32,
+        offset: *const u64,
+        data_size: usize,
+        buf: *const std::ffi::c_void,
+    ) -> i32;
+}
+
+/// The deflate level of [`chunked`] datasets. Their chunks are compressed here by zlib-rs
+/// ([`write_chunk_f32`]): at level 2 it packs a fiber table's chunks as tightly as the system
+/// zlib at level 4 (within 2 %) 1.8–2.8 times faster (measured on a silk sweep's
+/// `f_normalised` and `cdf_phi` chunks: 438 and 182 MB/s against 154 and 104 MB/s).
+pub const CHUNK_DEFLATE_LEVEL: u32 = 2;
+
 pub(crate) fn text_attr(loc: &h5::Location, name: &str, value: &str) -> anyhow::Result<()> {
     let v = VarLenUnicode::from_str(value).map_err(|e| anyhow::anyhow!("attribute {name}: {e}"))?;
     loc.new_attr::<VarLenUnicode>()
@@ -172,8 +191,9 @@ pub fn group(file: &h5::File, name: &str) -> anyhow::Result<h5::Group> {
         .create(name)?)
 }
 
-/// A dataset of `shape` in chunks of `chunk`, shuffled and deflated (level 4), recording no
-/// times; written slice by slice.
+/// A dataset of `shape` in chunks of `chunk`, shuffled and deflated
+/// ([`CHUNK_DEFLATE_LEVEL`]), recording no times; written chunk by chunk
+/// ([`write_chunk_f32`]).
 pub fn chunked<T: h5::H5Type>(
     g: &h5::Group,
     name: &str,
@@ -185,8 +205,61 @@ pub fn chunked<T: h5::H5Type>(
         .shape(shape)
         .chunk(chunk)
         .shuffle()
-        .deflate(4)
+        .deflate(CHUNK_DEFLATE_LEVEL as u8)
         .create(name)?)
+}
+
+/// Writes the whole chunk of `ds` (an f32 dataset made by [`chunked`]) that starts at element
+/// `offset`, filtered here as the dataset's pipeline would: the bytes of the little-endian
+/// values shuffled into planes (HDF5's shuffle filter: byte k of every value, k = 0..4), then
+/// one zlib stream (the deflate filter's format). Readers decode it like any other chunk.
+pub fn write_chunk_f32(ds: &h5::Dataset, offset: &[usize], values: &[f32]) -> anyhow::Result<()> {
+    let chunk = ds
+        .chunk()
+        .ok_or_else(|| anyhow::anyhow!("{}: not a chunked dataset", ds.name()))?;
+    let shape = ds.shape();
+    anyhow::ensure!(
+        chunk.iter().product::<usize>() == values.len()
+            && offset.len() == shape.len()
+            && offset
+                .iter()
+                .zip(&chunk)
+                .zip(&shape)
+                .all(|((o, c), n)| o % c == 0 && o < n),
+        "{}: {} values at {offset:?} are not a chunk {chunk:?} of {shape:?}",
+        ds.name(),
+        values.len()
+    );
+    let n = values.len();
+    let mut planes = vec![0u8; 4 * n];
+    for (i, v) in values.iter().enumerate() {
+        for (k, b) in v.to_le_bytes().into_iter().enumerate() {
+            planes[k * n + i] = b;
+        }
+    }
+    let mut z = flate2::write::ZlibEncoder::new(
+        Vec::with_capacity(n),
+        flate2::Compression::new(CHUNK_DEFLATE_LEVEL),
+    );
+    std::io::Write::write_all(&mut z, &planes)?;
+    let bytes = z.finish()?;
+    let offset: Vec<u64> = offset.iter().map(|&o| o as u64).collect();
+    let rc = h5::sync::sync(|| unsafe {
+        H5Dwrite_chunk(
+            ds.id(),
+            hdf5_metno_sys::h5p::H5P_DEFAULT,
+            0,
+            offset.as_ptr(),
+            bytes.len(),
+            bytes.as_ptr().cast(),
+        )
+    });
+    anyhow::ensure!(
+        rc >= 0,
+        "{}: H5Dwrite_chunk at {offset:?} failed",
+        ds.name()
+    );
+    Ok(())
 }
 
 /// A contiguous dataset of `shape` holding `data`, recording no times.
@@ -212,4 +285,40 @@ pub fn strings(g: &h5::Group, name: &str, values: &[String]) -> anyhow::Result<h
         .map(|s| VarLenUnicode::from_str(s).map_err(|e| anyhow::anyhow!("{name}: {e}")))
         .collect::<anyhow::Result<_>>()?;
     array(g, name, &[values.len()], &v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Chunks filtered here (shuffle, zlib-rs) read back through HDF5's own pipeline as the
+    /// values written, whole and by slices; a misplaced or misshapen chunk is refused.
+    #[test]
+    fn direct_chunks_read_back_through_the_filters() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = create_file(&dir.path().join("t.h5")).unwrap();
+        let g = group(&file, "g").unwrap();
+        let ds = chunked::<f32>(&g, "x", &[3, 2, 5], &[1, 2, 5]).unwrap();
+        let value = |i: usize, j: usize, k: usize| {
+            // Every byte plane varies: signs, exponents and full mantissas.
+            (-1f32).powi(k as i32) * (1.0 + 0.37 * (i * 10 + j * 5 + k) as f32).powf(2.7) / 3.0
+        };
+        for i in [2, 0, 1] {
+            let chunk: Vec<f32> = (0..2)
+                .flat_map(|j| (0..5).map(move |k| value(i, j, k)))
+                .collect();
+            write_chunk_f32(&ds, &[i, 0, 0], &chunk).unwrap();
+        }
+        let back = ds.read_raw::<f32>().unwrap();
+        let want: Vec<f32> = (0..3)
+            .flat_map(|i| (0..2).flat_map(move |j| (0..5).map(move |k| value(i, j, k))))
+            .collect();
+        assert_eq!(back, want);
+        let row = ds.read_slice_1d::<f32, _>(ndarray::s![1, 1, ..]).unwrap();
+        assert_eq!(row.to_vec(), want[15..20].to_vec());
+        assert!(write_chunk_f32(&ds, &[1, 1, 0], &want[..10]).is_err());
+        assert!(write_chunk_f32(&ds, &[3, 0, 0], &want[..10]).is_err());
+        assert!(write_chunk_f32(&ds, &[1, 0, 0], &want[..9]).is_err());
+        assert!(write_chunk_f32(&ds, &[1, 0], &want[..10]).is_err());
+    }
 }

@@ -289,6 +289,26 @@ impl Runner {
     where
         T: serde::Serialize + serde::de::DeserializeOwned,
     {
+        self.unit_deferred(id, key, index, photons, compute)?
+            .map(Computed::stored)
+            .transpose()
+            .map_err(UnitError::Failed)
+    }
+
+    /// [`Runner::unit`], leaving a freshly computed result's cache write to the caller
+    /// ([`Computed::Fresh`]'s [`ToStore`]): a pipeline that hands each unit on to a thread of
+    /// its own writes it there, and the units that follow start at once.
+    pub fn unit_deferred<T>(
+        &self,
+        id: &str,
+        key: Key,
+        index: Option<usize>,
+        photons: u64,
+        compute: impl FnOnce() -> anyhow::Result<T>,
+    ) -> Result<Option<Computed<T>>, UnitError>
+    where
+        T: serde::Serialize + serde::de::DeserializeOwned,
+    {
         self.unit_in(self.current_phase(), id, key, index, photons, compute)
     }
 
@@ -303,7 +323,10 @@ impl Runner {
     where
         T: serde::Serialize + serde::de::DeserializeOwned,
     {
-        self.unit_in(None, id, key, None, photons, compute)
+        self.unit_in(None, id, key, None, photons, compute)?
+            .map(Computed::stored)
+            .transpose()
+            .map_err(UnitError::Failed)
     }
 
     fn unit_in<T>(
@@ -314,7 +337,7 @@ impl Runner {
         index: Option<usize>,
         photons: u64,
         compute: impl FnOnce() -> anyhow::Result<T>,
-    ) -> Result<Option<T>, UnitError>
+    ) -> Result<Option<Computed<T>>, UnitError>
     where
         T: serde::Serialize + serde::de::DeserializeOwned,
     {
@@ -324,7 +347,7 @@ impl Runner {
             self.used.lock().unwrap().push((id.to_string(), key));
             let place = phase.as_ref().map(|p| p.unit_done(photons, true));
             self.events.cache_hit(id, &key, place);
-            return Ok(Some(v));
+            return Ok(Some(Computed::Cached(v)));
         }
         if self.require_cached && index.is_some() {
             return Err(UnitError::Missing(id.to_string()));
@@ -345,15 +368,53 @@ impl Runner {
                 UnitError::Failed(e)
             }
         })?;
-        self.cache
-            .store(&key, &v)
-            .map_err(|e| UnitError::Failed(e.context(format!("caching unit {id}"))))?;
         self.computed.fetch_add(1, Relaxed);
         self.used.lock().unwrap().push((id.to_string(), key));
         let place = phase.as_ref().map(|p| p.unit_done(photons, false));
         self.events
             .unit_finished(id, &key, t0.elapsed().as_secs_f64(), photons, place);
-        Ok(Some(v))
+        let store = ToStore {
+            cache: self.cache.clone(),
+            id: id.to_string(),
+            key,
+        };
+        Ok(Some(Computed::Fresh(v, store)))
+    }
+}
+
+/// A unit's result: read from the cache, or computed here and still to be written there.
+pub enum Computed<T> {
+    Cached(T),
+    Fresh(T, ToStore),
+}
+
+impl<T: serde::Serialize> Computed<T> {
+    /// The result, written to the cache first if it was computed here.
+    pub fn stored(self) -> anyhow::Result<T> {
+        match self {
+            Computed::Cached(v) => Ok(v),
+            Computed::Fresh(v, store) => {
+                store.write(&v)?;
+                Ok(v)
+            }
+        }
+    }
+}
+
+/// Where a freshly computed unit goes in the cache ([`Runner::unit_deferred`]).
+#[must_use = "a computed unit is only cached once written"]
+pub struct ToStore {
+    cache: Cache,
+    id: String,
+    key: Key,
+}
+
+impl ToStore {
+    /// Writes `v`, the unit's result, to the cache (atomically).
+    pub fn write<T: serde::Serialize>(self, v: &T) -> anyhow::Result<()> {
+        self.cache
+            .store(&self.key, v)
+            .map_err(|e| e.context(format!("caching unit {}", self.id)))
     }
 }
 

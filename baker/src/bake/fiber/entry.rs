@@ -15,12 +15,15 @@ use crate::bake::destination::Destination;
 use crate::bake::job::Job;
 use crate::fiber::slices::{self as bake, incident_of_bin, unit_len, BakeSettings, NoiseTarget};
 use crate::fiber::sweep::ChannelKind;
-use crate::fiber::Fiber;
 use crate::math::rng::coordinate_seed;
 use crate::output::{atomic, hdf5 as h5out};
+use crate::pipeline::Computed;
 use crate::progress::Progress;
 use crate::spec::fiber::{FiberEntry, FiberSpec};
 use formats::bcsdf::{self, KIND};
+
+/// One unit's slices: per stored direction, its sections' slices.
+type UnitSlices = Vec<Vec<bake::SliceResult>>;
 
 /// What one entry's bake measured (written to the manifest).
 #[derive(Debug, Serialize)]
@@ -168,17 +171,18 @@ impl EntryBake<'_> {
     }
 
     /// The results of unit `u` (its stored directions, every section), from the cache or
-    /// traced; `None` if another shard owns it.
+    /// traced (and then still to be cached: [`Computed::Fresh`]); `None` if another shard
+    /// owns it.
     fn unit_results(
         &self,
         u: usize,
         chunk: &[usize],
         bar: Option<&dyn Progress>,
-    ) -> anyhow::Result<Option<Vec<Vec<bake::SliceResult>>>> {
+    ) -> anyhow::Result<Option<Computed<UnitSlices>>> {
         let (s, st, runner) = (&self.setup, self.st, self.job.runner);
         let (id, key) = unit_id_key(&self.prefix, chunk, &s.stored, &s.key_base);
         let photons = (chunk.len() * s.fibers.len()) as u64 * st.photons;
-        let r = runner.unit(&id, key, Some(self.first_unit + u), photons, || {
+        let r = runner.unit_deferred(&id, key, Some(self.first_unit + u), photons, || {
             Ok(chunk
                 .par_iter()
                 .map(|&i| {
@@ -214,7 +218,9 @@ impl EntryBake<'_> {
         let all: Vec<usize> = (0..self.setup.stored.len()).collect();
         let r = (|| {
             for (u, chunk) in all.chunks(unit_len(all.len())).enumerate() {
-                self.unit_results(u, chunk, Some(&*phase))?;
+                if let Some(unit) = self.unit_results(u, chunk, Some(&*phase))? {
+                    unit.stored()?;
+                }
             }
             Ok(())
         })();
@@ -336,24 +342,15 @@ struct Geometry {
 impl Geometry {
     fn of(eb: &EntryBake) -> Geometry {
         let grid = &eb.setup.grid;
-        let wi_deg: Vec<[f64; 2]> = eb
-            .setup
-            .stored
-            .iter()
-            .map(|&b| {
-                let (it, jp) = (b / grid.n_phi, b % grid.n_phi);
-                [grid.theta_centre_deg(it), grid.phi_centre_deg(jp)]
-            })
-            .collect();
-        let phi_centres: Vec<f64> = (0..grid.n_phi).map(|j| grid.phi_centre_deg(j)).collect();
-        let area_of = |f: &Fiber| -> Vec<f64> {
-            phi_centres
-                .iter()
-                .map(|p| f.projected_width_um(p.to_radians()))
-                .collect()
-        };
+        let wi_deg = eb.setup.wi_deg();
+        let phi_centres = eb.setup.phi_centres_deg();
         let ns = eb.setup.fibers.len();
-        let mut areas: Vec<Vec<f64>> = eb.setup.fibers.iter().map(area_of).collect();
+        let mut areas: Vec<Vec<f64>> = eb
+            .setup
+            .fibers
+            .iter()
+            .map(|f| eb.setup.area_um(f))
+            .collect();
         if ns > 1 {
             let avg = (0..grid.n_phi)
                 .map(|j| areas.iter().map(|a| a[j]).sum::<f64>() / ns as f64)
@@ -458,10 +455,12 @@ fn trace_into(eb: &EntryBake, outs: &mut [TableOut], tallies: &mut Tallies) -> a
     r
 }
 
-/// [`trace_into`]'s loop over the units, reporting to `phase`. Encoding and writing a unit's
-/// tables runs on a thread of its own while the next unit traces (a wide sweep's tables take
-/// a while to compress, and the writer is serial): at most two units' results are held (the
-/// budget counts three, [`crate::spec::budget`]), and the tables are written in unit order.
+/// [`trace_into`]'s loop over the units, reporting to `phase`. Caching a traced unit and
+/// encoding and writing its tables run on a thread of its own while the next unit traces (a
+/// wide sweep's results take a while to compress, and the writers are serial): at most two
+/// units' results are held (the budget counts three, [`crate::spec::budget`]), and the
+/// tables are written in unit order. A unit is cached before its tables are written, so a
+/// stop while writing loses no traced unit.
 fn trace_units(
     eb: &EntryBake,
     phase: &crate::pipeline::Phase,
@@ -471,7 +470,7 @@ fn trace_units(
     let n_wi = eb.setup.stored.len();
     let all: Vec<usize> = (0..n_wi).collect();
     std::thread::scope(|scope| -> anyhow::Result<()> {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<(&[usize], Vec<Vec<bake::SliceResult>>)>(0);
+        let (tx, rx) = std::sync::mpsc::sync_channel::<(&[usize], Computed<UnitSlices>)>(0);
         let writer = scope.spawn(move || -> anyhow::Result<()> {
             let clip = (eb.st.channels == ChannelKind::Rgb).then(|| {
                 GamutClip::new(
@@ -479,7 +478,8 @@ fn trace_units(
                     eb.e.variants.iter().map(Option::is_none).collect(),
                 )
             });
-            for (chunk, results) in rx {
+            for (chunk, unit) in rx {
+                let results = unit.stored()?;
                 write_unit(eb, chunk, results, clip.as_ref(), outs, tallies)?;
             }
             Ok(())

@@ -43,6 +43,37 @@ pub struct EntrySetup {
     pub key_base: [u8; 32],
 }
 
+impl EntrySetup {
+    /// The stored incoming directions' bin centres, (θi, φi) in degrees.
+    pub fn wi_deg(&self) -> Vec<[f64; 2]> {
+        let g = &self.grid;
+        self.stored
+            .iter()
+            .map(|&b| {
+                [
+                    g.theta_centre_deg(b / g.n_phi),
+                    g.phi_centre_deg(b % g.n_phi),
+                ]
+            })
+            .collect()
+    }
+
+    /// The centres of the φ (and Δφ) bins, degrees.
+    pub fn phi_centres_deg(&self) -> Vec<f64> {
+        (0..self.grid.n_phi)
+            .map(|j| self.grid.phi_centre_deg(j))
+            .collect()
+    }
+
+    /// The projected width of section `f` at the φ bin centres, µm (a table's `area_um`).
+    pub fn area_um(&self, f: &Fiber) -> Vec<f64> {
+        self.phi_centres_deg()
+            .iter()
+            .map(|p| f.projected_width_um(p.to_radians()))
+            .collect()
+    }
+}
+
 /// The setup of entry `e` from what the resolver built (its sections and symmetries).
 pub fn entry_setup(e: &FiberEntry, st: &BakeSettings) -> anyhow::Result<EntrySetup> {
     let grid = AngularGrid::new(st.res_deg).map_err(anyhow::Error::msg)?;

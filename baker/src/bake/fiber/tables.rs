@@ -3,7 +3,6 @@
 //! incoming direction at a time (layout: formats/FORMAT.md, "Fiber BCSDF tables").
 
 use hdf5_metno as h5;
-use ndarray::{s, ArrayView3, ArrayView4, ArrayView5};
 
 use super::gamut::ClipStats;
 use crate::fiber::slices::{BakeSettings, SliceResult};
@@ -51,6 +50,21 @@ pub fn auto_zstd_level(photons: u64, raw_bytes: usize) -> i32 {
 impl Layout<'_> {
     fn n_wi(&self) -> usize {
         self.wi_deg.len()
+    }
+
+    /// The zstd level of a slice of the first pass (the level `auto` picks for
+    /// `photons_per_direction`, or the spec's).
+    fn first_pass_zstd_level(&self) -> i32 {
+        match self.zstd_level {
+            ZstdLevel::Level(z) => z,
+            ZstdLevel::Auto => {
+                let raw_bytes = self.variants.len()
+                    * self.channels.len()
+                    * self.grid.bins()
+                    * self.st.precision.size();
+                auto_zstd_level(self.st.photons_per_direction(), raw_bytes)
+            }
+        }
     }
 }
 
@@ -113,6 +127,7 @@ impl TableOut {
         let (n_wi, nv, nc) = (l.n_wi(), l.variants.len(), l.channels.len());
         let (nt, np) = (grid.n_theta, grid.n_phi);
         let g = h5out::group(file, name)?;
+        let level = l.first_pass_zstd_level();
         let f = h5out::chunked::<f32>(
             &g,
             "f_normalised",
@@ -133,10 +148,6 @@ impl TableOut {
             "description",
             "sampling CDF over dphi within each theta_o row",
         )?;
-        let level = match l.zstd_level {
-            ZstdLevel::Level(z) => z,
-            ZstdLevel::Auto => 9,
-        };
         Ok(TableOut {
             name: name.to_string(),
             writer: Writer::new(dir_t, level),
@@ -155,34 +166,23 @@ impl TableOut {
     /// CDFs into the HDF5 group.
     pub fn push(&mut self, i: usize, r: &SliceResult, grid: &AngularGrid) -> anyhow::Result<()> {
         let (nt, np) = (grid.n_theta, grid.n_phi);
-        let (nv, nc) = (
-            self.writer.dir.variants.len(),
-            self.writer.dir.channels.len(),
-        );
-        let tol = noise_tolerance(r, nc, grid.bins(), self.quantise_to_se);
-        if self.zstd_level == ZstdLevel::Auto {
-            let raw_bytes = nv * nc * grid.bins() * self.writer.dir.dtype.size();
-            self.writer
-                .set_level(auto_zstd_level(r.launched, raw_bytes));
-        }
-        let decoded = self
-            .writer
-            .push_within(&r.normalised(grid), tol.as_deref())?;
+        let nv = self.writer.dir.variants.len();
+        let decoded = push_slice(
+            &mut self.writer,
+            r,
+            grid,
+            self.quantise_to_se,
+            self.zstd_level,
+        )?;
         self.albedo.extend(r.albedo.iter().map(|&x| x as f32));
         self.albedo_se.extend(r.albedo_se.iter().map(|&x| x as f32));
-        let view = ArrayView5::from_shape((1, nv, nc, nt, np), &decoded)?;
-        self.f.write_slice(view, s![i..i + 1, .., .., .., ..])?;
+        h5out::write_chunk_f32(&self.f, &[i, 0, 0, 0, 0], &decoded)?;
         let (ct, cp, _) = bcsdf::sampling_cdfs(&self.writer.dir, &decoded);
         let ct: Vec<f32> = ct.iter().flatten().map(|&x| x as f32).collect();
         let cp: Vec<f32> = cp.iter().flatten().map(|&x| x as f32).collect();
-        self.cdf_theta.write_slice(
-            ArrayView3::from_shape((1, nv, nt), &ct)?,
-            s![i..i + 1, .., ..],
-        )?;
-        self.cdf_phi.write_slice(
-            ArrayView4::from_shape((1, nv, nt, np), &cp)?,
-            s![i..i + 1, .., .., ..],
-        )?;
+        debug_assert_eq!((ct.len(), cp.len()), (nv * nt, nv * nt * np));
+        h5out::write_chunk_f32(&self.cdf_theta, &[i, 0, 0], &ct)?;
+        h5out::write_chunk_f32(&self.cdf_phi, &[i, 0, 0, 0], &cp)?;
         Ok(())
     }
 
@@ -280,6 +280,26 @@ impl TableOut {
         let bytes = self.writer.finish()?;
         Ok((self.name, bytes))
     }
+}
+
+/// Encodes slice `r` into `w` as a table stores it: each value rounded within
+/// `quantise_to_se` of its bin's standard error ([`noise_tolerance`]), compressed at
+/// `zstd_level` (`auto`: [`auto_zstd_level`] of the photons the slice took). Returns the
+/// decoded values.
+pub fn push_slice(
+    w: &mut Writer,
+    r: &SliceResult,
+    grid: &AngularGrid,
+    quantise_to_se: f64,
+    zstd_level: ZstdLevel,
+) -> anyhow::Result<Vec<f32>> {
+    let nc = w.dir.channels.len();
+    let tol = noise_tolerance(r, nc, grid.bins(), quantise_to_se);
+    if zstd_level == ZstdLevel::Auto {
+        let raw_bytes = w.dir.variants.len() * nc * grid.bins() * w.dir.dtype.size();
+        w.set_level(auto_zstd_level(r.launched, raw_bytes));
+    }
+    Ok(w.push_within(&r.normalised(grid), tol.as_deref())?)
 }
 
 /// The relative rounding tolerance of every bin of `r`'s slice (θo × Δφ): `q` times the

@@ -6,15 +6,23 @@
 //! (evenly spread over the symmetry-reduced list, the same ones every run) is traced to the
 //! target with the spec's estimators, and the mean time per direction is scaled by the number
 //! of stored directions. The figure is an estimate of that kind and says so.
+//!
+//! The table's size is estimated the same way: each measured slice is encoded as a bake
+//! stores it (the spec's precision and channels, `quantise_to_se`, `zstd_level`), the mean
+//! compressed bytes per direction are scaled by the stored directions, and the directory is
+//! built for every stored direction (their scales and albedos repeated from the measured
+//! ones) and compressed as a bake compresses it.
 
 use serde::Serialize;
 
-use super::setup::{entry_setup, typical_path_um};
+use super::setup::{entry_setup, typical_path_um, EntrySetup};
+use super::tables::push_slice;
 use crate::cancel::Cancel;
-use crate::fiber::slices::{incident_of_bin, trace_slice, BakeSettings, NoiseTarget};
+use crate::fiber::slices::{incident_of_bin, trace_slice, BakeSettings, NoiseTarget, SliceResult};
 use crate::fiber::sweep::{Channels, Variant};
 use crate::math::rng::coordinate_seed;
-use crate::spec::fiber::FiberEntry;
+use crate::spec::fiber::{FiberEntry, TableStorage};
+use formats::bcsdf::{self, Chunk, Directory, Writer};
 
 /// Table 10 of the thesis: average computation time (minutes) and storage of the BCSDF
 /// (MB, 32-bit floats, monochromatic) per fiber type.
@@ -30,11 +38,18 @@ pub fn table_10_minutes(fiber_type: &str) -> Option<f64> {
     TABLE_10.iter().find(|r| r.0 == fiber_type).map(|r| r.1)
 }
 
+/// Table 10's storage (MB) for a fiber type, if it has a row.
+pub fn table_10_mb(fiber_type: &str) -> Option<f64> {
+    TABLE_10.iter().find(|r| r.0 == fiber_type).map(|r| r.2)
+}
+
 /// One entry measured at the thesis's noise.
 #[derive(Debug, Clone, Serialize)]
 pub struct ThesisCost {
     pub entry: String,
     pub fiber_type: String,
+    /// The variant traced: `undyed`, or the entry's first (`--dyed`).
+    pub variant: String,
     /// Incoming directions the table stores after symmetry (2° bins).
     pub stored_directions: usize,
     /// Directions traced here.
@@ -54,14 +69,23 @@ pub struct ThesisCost {
     /// seconds_per_direction × stored_directions.
     pub estimated_seconds: f64,
     pub table_10_minutes: Option<f64>,
+    /// Mean compressed bytes of a measured slice as the spec's tables store it.
+    pub bytes_per_direction: f64,
+    /// The `.bcsdf` file of one cross-section: bytes_per_direction × stored_directions, plus
+    /// the header and the compressed directory of every stored direction.
+    pub estimated_bcsdf_bytes: f64,
+    pub table_10_mb: Option<f64>,
 }
 
-/// Measures entry `e` (its first cross-section, undyed)
+/// Measures entry `e` (its first cross-section, undyed, or `dyed` as its first variant)
 /// with the estimators of `st`, at 2° bins, tracing `directions` of its stored directions to
-/// the thesis's noise (at most `st.max_photons` photons each).
+/// the thesis's noise (at most `st.max_photons` photons each), and stores the slices as
+/// `storage` says.
 pub fn measure(
     e: &FiberEntry,
     st: &BakeSettings,
+    storage: &TableStorage,
+    dyed: bool,
     directions: usize,
     cancel: &Cancel,
 ) -> anyhow::Result<ThesisCost> {
@@ -72,13 +96,17 @@ pub fn measure(
     };
     let mut s = entry_setup(e, &st)?;
     // The thesis's noise is defined on the undyed fiber, and Table 10 times one monochromatic
-    // table: trace the undyed variant alone (a dye sweep adds scoring, [`crate::fiber::sweep`]).
-    let undyed = Variant {
-        name: FiberEntry::variant_name(None),
-        mua_per_um: vec![0.0; st.lambda_nm.len()],
+    // table: trace the undyed variant alone (a dye sweep adds scoring, [`crate::fiber::sweep`]),
+    // or the entry's first variant alone.
+    let variant = match s.variants.first() {
+        Some(v) if dyed => v.clone(),
+        _ => Variant {
+            name: FiberEntry::variant_name(None),
+            mua_per_um: vec![0.0; st.lambda_nm.len()],
+        },
     };
     s.channels = Channels::new(
-        &[undyed],
+        std::slice::from_ref(&variant),
         &st.lambda_nm,
         st.channels,
         typical_path_um(&s.fibers[0]),
@@ -86,6 +114,7 @@ pub fn measure(
     let n = s.stored.len();
     let k = directions.clamp(1, n);
     let (mut secs, mut photons, mut noise, mut thesis, mut capped) = (0.0, 0.0, 0.0, 0.0, 0);
+    let mut sample = Sample::new(&s, &variant.name, &st);
     for i in 0..k {
         let b = s.stored[(2 * i + 1) * n / (2 * k)];
         let inc = incident_of_bin(&s.grid, b / s.grid.n_phi, b % s.grid.n_phi);
@@ -96,11 +125,14 @@ pub fn measure(
         noise += r.noise.median_rel_se;
         thesis += r.noise.thesis_rel_se;
         capped += usize::from(!NoiseTarget::Thesis.met_by(&r.noise));
+        sample.push(&r, &s, storage)?;
     }
     let kf = k as f64;
+    let bytes_per_direction = sample.bytes_per_direction();
     Ok(ThesisCost {
         entry: e.name.clone(),
         fiber_type: e.fiber_type.name.to_string(),
+        variant: variant.name.clone(),
         stored_directions: n,
         measured_directions: k,
         split: st.split,
@@ -114,5 +146,102 @@ pub fn measure(
         capped,
         estimated_seconds: secs / kf * n as f64,
         table_10_minutes: table_10_minutes(e.fiber_type.name),
+        bytes_per_direction,
+        estimated_bcsdf_bytes: bytes_per_direction * n as f64 + sample.directory_bytes()? as f64,
+        table_10_mb: table_10_mb(e.fiber_type.name),
     })
+}
+
+/// A table of every stored direction of `s` holding the measured slices, encoded as a
+/// bake encodes them ([`push_slice`]), with their albedos.
+struct Sample {
+    writer: Writer,
+    albedo: Vec<f32>,
+    albedo_se: Vec<f32>,
+}
+
+impl Sample {
+    fn new(s: &EntrySetup, variant: &str, st: &BakeSettings) -> Sample {
+        let dir = Directory {
+            kind: bcsdf::KIND.into(),
+            res_deg: st.res_deg,
+            n_theta: s.grid.n_theta,
+            n_phi: s.grid.n_phi,
+            wi_deg: s.wi_deg(),
+            wi_map: s.map.clone(),
+            variants: vec![variant.to_string()],
+            channels: s.channels.channel_names.clone(),
+            dtype: st.precision,
+            keep_bits: st.keep_bits,
+            scale: vec![],
+            albedo: vec![],
+            albedo_se: vec![],
+            area_um: s.area_um(&s.fibers[0]),
+            chunks: vec![],
+            metadata: serde_json::Value::Null,
+        };
+        Sample {
+            writer: Writer::new(dir, 9),
+            albedo: vec![],
+            albedo_se: vec![],
+        }
+    }
+
+    fn push(
+        &mut self,
+        r: &SliceResult,
+        s: &EntrySetup,
+        storage: &TableStorage,
+    ) -> anyhow::Result<()> {
+        push_slice(
+            &mut self.writer,
+            r,
+            &s.grid,
+            storage.quantise_to_se,
+            storage.zstd_level,
+        )?;
+        self.albedo.extend(r.albedo.iter().map(|&x| x as f32));
+        self.albedo_se.extend(r.albedo_se.iter().map(|&x| x as f32));
+        Ok(())
+    }
+
+    /// Mean compressed bytes of a measured slice.
+    fn bytes_per_direction(&self) -> f64 {
+        let c = &self.writer.dir.chunks;
+        c.iter().map(|c| c.compressed_bytes as f64).sum::<f64>() / c.len().max(1) as f64
+    }
+
+    /// The header and compressed directory of the whole table: the measured slices' scales,
+    /// albedos and chunk sizes repeated in turn over the stored directions (the metadata, a
+    /// few hundred bytes, left out), compressed at the last slice's level as a bake does.
+    fn directory_bytes(&self) -> anyhow::Result<usize> {
+        let d = &self.writer.dir;
+        let (n, k) = (d.wi_deg.len(), d.chunks.len().max(1));
+        let per = d.scale.len() / k;
+        let cycle = |v: &[f32]| -> Vec<f32> {
+            (0..n)
+                .flat_map(|i| v[(i % k) * per..(i % k + 1) * per].iter().copied())
+                .collect()
+        };
+        let mut offset = 0;
+        let chunks = (0..n)
+            .map(|i| {
+                let c = Chunk {
+                    offset,
+                    ..d.chunks[i % k].clone()
+                };
+                offset += c.compressed_bytes;
+                c
+            })
+            .collect();
+        let full = Directory {
+            scale: cycle(&d.scale),
+            albedo: cycle(&self.albedo),
+            albedo_se: cycle(&self.albedo_se),
+            chunks,
+            ..d.clone()
+        };
+        let json = serde_json::to_vec(&full)?;
+        Ok(bcsdf::HEADER_LEN + zstd::bulk::compress(&json, self.writer.level())?.len())
+    }
 }
