@@ -550,14 +550,16 @@ impl SliceSums {
         let nbf = self.used as f64;
         let hn = if self.gtot > 0.0 { self.gtot } else { 1.0 };
         let mut fraction = vec![0.0; nch * bins];
+        let mut albedo = vec![0.0; nch];
         for b in 0..bins {
             for c in 0..nch {
-                fraction[c * bins + b] = f64::from((self.sum[b * nch + c] / hn) as f32);
+                let x = self.sum[b * nch + c] / hn;
+                fraction[c * bins + b] = f64::from(x as f32);
+                // Λ from the full-precision fractions (in bin order): a white furnace gives
+                // exactly one, not one less the fractions' f32 rounding.
+                albedo[c] += x;
             }
         }
-        let albedo: Vec<f64> = (0..nch)
-            .map(|c| fraction[c * bins..(c + 1) * bins].iter().sum())
-            .collect();
         let albedo_se = (0..nch)
             .map(|c| batch_se(self.alb_s[c], self.alb_s2[c], nbf))
             .collect();
