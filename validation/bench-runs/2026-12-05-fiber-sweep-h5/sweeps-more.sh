@@ -8,6 +8,6 @@ for f in polyester cotton; do
     /usr/bin/time -f "$f $b one %e s wall, %U s user, %S s sys" $B bake --threads 2 -q -o /tmp/meas3/$f-one-$b $D/$f-one.yaml
     /usr/bin/time -f "$f $b sweep20 %e s wall, %U s user, %S s sys" $B bake --threads 2 -q -o /tmp/meas3/$f-sweep-$b $D/$f-sweep20.yaml
   done
-  for k in one sweep; do cmp /tmp/meas3/$f-$k-O/*/$f/section-00.bcsdf /tmp/meas3/$f-$k-N/*/$f/section-00.bcsdf && echo "$f $k .bcsdf identical"; done
+  for k in one sweep; do cmp -s /tmp/meas3/$f-$k-O/*/$f/section-00.bcsdf /tmp/meas3/$f-$k-N/*/$f/section-00.bcsdf && echo "$f $k .bcsdf identical" || echo "$f $k .bcsdf differs (f32 fractions)"; done
 done
 echo done
