@@ -52,19 +52,33 @@ impl Layout<'_> {
         self.wi_deg.len()
     }
 
-    /// The zstd level of a slice of the first pass (the level `auto` picks for
-    /// `photons_per_direction`, or the spec's).
-    fn first_pass_zstd_level(&self) -> i32 {
-        match self.zstd_level {
+    /// The streaming `.bcsdf` writer of one table of this layout (its directory without
+    /// slices), at the spec's zstd level (`auto` sets it per slice, [`push_slice`]).
+    pub fn writer(&self, area_um: Vec<f64>, metadata: serde_json::Value) -> Writer {
+        let (grid, st) = (self.grid, self.st);
+        let dir = Directory {
+            kind: KIND.into(),
+            res_deg: st.res_deg,
+            n_theta: grid.n_theta,
+            n_phi: grid.n_phi,
+            wi_deg: self.wi_deg.to_vec(),
+            wi_map: self.map.to_vec(),
+            variants: self.variants.to_vec(),
+            channels: self.channels.to_vec(),
+            dtype: st.precision,
+            keep_bits: st.keep_bits,
+            scale: vec![],
+            albedo: vec![],
+            albedo_se: vec![],
+            area_um,
+            chunks: vec![],
+            metadata,
+        };
+        let level = match self.zstd_level {
             ZstdLevel::Level(z) => z,
-            ZstdLevel::Auto => {
-                let raw_bytes = self.variants.len()
-                    * self.channels.len()
-                    * self.grid.bins()
-                    * self.st.precision.size();
-                auto_zstd_level(self.st.photons_per_direction(), raw_bytes)
-            }
-        }
+            ZstdLevel::Auto => 9,
+        };
+        Writer::new(dir, level)
     }
 }
 
@@ -105,29 +119,10 @@ impl TableOut {
         area_um: Vec<f64>,
         metadata: serde_json::Value,
     ) -> anyhow::Result<TableOut> {
-        let (grid, st) = (l.grid, l.st);
-        let dir_t = Directory {
-            kind: KIND.into(),
-            res_deg: st.res_deg,
-            n_theta: grid.n_theta,
-            n_phi: grid.n_phi,
-            wi_deg: l.wi_deg.to_vec(),
-            wi_map: l.map.to_vec(),
-            variants: l.variants.to_vec(),
-            channels: l.channels.to_vec(),
-            dtype: st.precision,
-            keep_bits: st.keep_bits,
-            scale: vec![],
-            albedo: vec![],
-            albedo_se: vec![],
-            area_um,
-            chunks: vec![],
-            metadata,
-        };
+        let grid = l.grid;
         let (n_wi, nv, nc) = (l.n_wi(), l.variants.len(), l.channels.len());
         let (nt, np) = (grid.n_theta, grid.n_phi);
         let g = h5out::group(file, name)?;
-        let level = l.first_pass_zstd_level();
         let f = h5out::chunked::<f32>(
             &g,
             "f_normalised",
@@ -150,7 +145,7 @@ impl TableOut {
         )?;
         Ok(TableOut {
             name: name.to_string(),
-            writer: Writer::new(dir_t, level),
+            writer: l.writer(area_um, metadata),
             f,
             cdf_theta,
             cdf_phi,

@@ -16,7 +16,7 @@
 use serde::Serialize;
 
 use super::setup::{entry_setup, typical_path_um, EntrySetup};
-use super::tables::push_slice;
+use super::tables::{push_slice, Layout};
 use crate::cancel::Cancel;
 use crate::fiber::slices::{incident_of_bin, trace_slice, BakeSettings, NoiseTarget, SliceResult};
 use crate::fiber::sweep::{Channels, Variant};
@@ -114,7 +114,7 @@ pub fn measure(
     let n = s.stored.len();
     let k = directions.clamp(1, n);
     let (mut secs, mut photons, mut noise, mut thesis, mut capped) = (0.0, 0.0, 0.0, 0.0, 0);
-    let mut sample = Sample::new(&s, &variant.name, &st);
+    let mut sample = Sample::new(&s, &variant.name, &st, storage);
     for i in 0..k {
         let b = s.stored[(2 * i + 1) * n / (2 * k)];
         let inc = incident_of_bin(&s.grid, b / s.grid.n_phi, b % s.grid.n_phi);
@@ -161,27 +161,23 @@ struct Sample {
 }
 
 impl Sample {
-    fn new(s: &EntrySetup, variant: &str, st: &BakeSettings) -> Sample {
-        let dir = Directory {
-            kind: bcsdf::KIND.into(),
-            res_deg: st.res_deg,
-            n_theta: s.grid.n_theta,
-            n_phi: s.grid.n_phi,
-            wi_deg: s.wi_deg(),
-            wi_map: s.map.clone(),
-            variants: vec![variant.to_string()],
-            channels: s.channels.channel_names.clone(),
-            dtype: st.precision,
-            keep_bits: st.keep_bits,
-            scale: vec![],
-            albedo: vec![],
-            albedo_se: vec![],
-            area_um: s.area_um(&s.fibers[0]),
-            chunks: vec![],
-            metadata: serde_json::Value::Null,
+    /// The table of entry setup `s` storing `variant` as the spec's `storage` says.
+    fn new(s: &EntrySetup, variant: &str, st: &BakeSettings, storage: &TableStorage) -> Sample {
+        let (wi_deg, phi_centres) = (s.wi_deg(), s.phi_centres_deg());
+        let variants = [variant.to_string()];
+        let layout = Layout {
+            grid: &s.grid,
+            st,
+            wi_deg: &wi_deg,
+            map: &s.map,
+            variants: &variants,
+            channels: &s.channels.channel_names,
+            phi_centres: &phi_centres,
+            quantise_to_se: storage.quantise_to_se,
+            zstd_level: storage.zstd_level,
         };
         Sample {
-            writer: Writer::new(dir, 9),
+            writer: layout.writer(s.area_um(&s.fibers[0]), serde_json::Value::Null),
             albedo: vec![],
             albedo_se: vec![],
         }
