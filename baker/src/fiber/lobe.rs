@@ -23,12 +23,17 @@
 //! slopes are Gaussian, so facets beyond that radius carry exp(−WINDOW_SLOPES²) of the lobe,
 //! which the draw then scores. Windows near a pole span every Δφ; a window larger than
 //! [`MAX_WINDOW_BINS`] is not evaluated (its event is drawn plainly), which bounds the cost.
+//!
+//! Cost: a window holds tens (polyester at 2°) to thousands (cotton) of bins, so the densities
+//! dominate. The bins' directions come from per-grid tables (sin and cos of the θ edges and of
+//! the column steps, the ring's azimuths), and the densities of 64 bins at a time from one
+//! branch-free, vectorised pass ([`FacetPdf::eval_many`]: the same bits on every machine).
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use smallvec::SmallVec;
 
-use super::surface::{basis, dot, normalize, reflect, refract};
+use super::surface::{basis, dot, normalize, reflect, refract, FacetPdf};
 use super::Surface;
 use crate::math::fresnel;
 use formats::AngularGrid;
@@ -47,8 +52,14 @@ pub struct LobeGrid {
     /// Azimuth Δφ is measured from, radians.
     phi_c: f64,
     res: f64,
-    /// sin of the θ edges, `n_theta + 1`.
+    /// sin and cos of the θ edges, `n_theta + 1`.
     sin_edges: Vec<f64>,
+    cos_edges: Vec<f64>,
+    /// (cos, sin) of j·res for every column offset j (the window's columns by angle
+    /// addition, [`LobeGrid::spread`]).
+    col_steps: Vec<(f64, f64)>,
+    /// (cos, sin) of the ring's azimuths.
+    ring: [(f64, f64); RING],
 }
 
 /// One boundary event: the photon's direction `d`, the mean normal `nf` facing it, and its side.
@@ -62,13 +73,25 @@ pub struct Event {
 impl LobeGrid {
     pub fn new(grid: AngularGrid, phi_c_rad: f64) -> Self {
         let res = grid.res_deg.to_radians();
+        let edge = |i: usize| (-FRAC_PI_2 + i as f64 * res).sin_cos();
         Self {
             grid,
             phi_c: phi_c_rad,
             res,
             sin_edges: (0..=grid.n_theta)
-                .map(|i| (-FRAC_PI_2 + i as f64 * res).sin().clamp(-1.0, 1.0))
+                .map(|i| edge(i).0.clamp(-1.0, 1.0))
                 .collect(),
+            cos_edges: (0..=grid.n_theta).map(|i| edge(i).1.max(0.0)).collect(),
+            col_steps: (0..grid.n_phi)
+                .map(|j| {
+                    let (s, c) = (j as f64 * res).sin_cos();
+                    (c, s)
+                })
+                .collect(),
+            ring: std::array::from_fn(|k| {
+                let (s, c) = (TAU * k as f64 / RING as f64).sin_cos();
+                (c, s)
+            }),
         }
     }
 
@@ -89,9 +112,8 @@ impl LobeGrid {
         let mut exits: SmallVec<[[f64; 3]; 64]> = SmallVec::new();
         exits.extend(exit_through(s, e, e.nf));
         for radius in [s.alpha, WINDOW_SLOPES * s.alpha] {
-            for k in 0..RING {
-                let a = TAU * k as f64 / RING as f64;
-                let (sx, sy) = (radius * a.cos(), radius * a.sin());
+            for &(ca, sa) in &self.ring {
+                let (sx, sy) = (radius * ca, radius * sa);
                 let m = normalize([
                     e.nf[0] + sx * t[0] + sy * b[0],
                     e.nf[1] + sx * t[1] + sy * b[1],
@@ -111,6 +133,11 @@ impl LobeGrid {
         }
         let axis = normalize(sum);
         let cos_rho = exits.iter().map(|w| dot(*w, axis)).fold(1.0f64, f64::min);
+        // The window holds at least the cone's solid angle 2π(1 − cos ρ) in bins of at most
+        // res² each: past the limit already, it is not laid out.
+        if TAU * (1.0 - cos_rho) > MAX_WINDOW_BINS as f64 * self.res * self.res {
+            return None;
+        }
         let rho = cos_rho.clamp(-1.0, 1.0).acos();
         let g = &self.grid;
         let theta_a = axis[2].clamp(-1.0, 1.0).asin();
@@ -121,20 +148,16 @@ impl LobeGrid {
         // Per θ row, the columns of the cone's arc: at latitude θ the cone holds the azimuths
         // with cos(φ − φa) ≥ (cos ρ − sin θ sin θa)/(cos θ cos θa); the widest arc of a row is
         // at the latitude nearest to the one where the arc is widest, sin θ = sin θa / cos ρ.
+        // The half-angle is acos of x = (cos ρ − sin θ sin θa)/(cos θ cos θa), decreasing in
+        // x: a row's widest arc is acos of the least x over its edges and the two latitudes
+        // above where they fall inside it (x = −∞ where the cone holds every azimuth).
         let (sa, ca) = theta_a.sin_cos();
-        let half_at = |th: f64| -> f64 {
-            let (st, ct) = th.sin_cos();
+        let x_at = |st: f64, ct: f64| -> f64 {
             let den = ct * ca;
             if den <= 1e-12 {
-                return PI;
-            }
-            let x = (cos_rho - st * sa) / den;
-            if x <= -1.0 {
-                PI
-            } else if x >= 1.0 {
-                0.0
+                f64::NEG_INFINITY
             } else {
-                x.acos()
+                (cos_rho - st * sa) / den
             }
         };
         let widest = if cos_rho > 0.0 {
@@ -144,13 +167,26 @@ impl LobeGrid {
         };
         let mut rows = SmallVec::new();
         let mut bins = 0;
+        let mut x_lo = x_at(self.sin_edges[it0], self.cos_edges[it0]);
         for it in it0..=it1 {
             let lo = -FRAC_PI_2 + it as f64 * self.res;
             let hi = lo + self.res;
-            let half = half_at(lo)
-                .max(half_at(hi))
-                .max(half_at(widest.clamp(lo, hi)))
-                .max(half_at(theta_a.clamp(lo, hi)));
+            let x_hi = x_at(self.sin_edges[it + 1], self.cos_edges[it + 1]);
+            let mut x = x_lo.min(x_hi);
+            for th in [widest, theta_a] {
+                if th > lo && th < hi {
+                    let (st, ct) = th.sin_cos();
+                    x = x.min(x_at(st, ct));
+                }
+            }
+            x_lo = x_hi;
+            let half = if x <= -1.0 {
+                PI
+            } else if x >= 1.0 {
+                0.0
+            } else {
+                x.acos()
+            };
             let (jp0, np) = if half >= PI - self.res {
                 (0, g.n_phi)
             } else {
@@ -189,23 +225,93 @@ impl LobeGrid {
         mut f: impl FnMut(u32, f64),
     ) {
         let g = &self.grid;
+        if s.alpha == 0.0 {
+            return;
+        }
+        let pdf = FacetPdf::new(s, e.d, e.nf, e.inside);
+        // The window's directions in chunks of CHUNK (in row order, so `f` sees the bins in
+        // the order a bin-by-bin loop would): each chunk's densities in one vectorised pass.
+        let mut ch = Chunk::default();
+        // Column jp's azimuth is φ0 + jp·res: its cos and sin by angle addition.
+        let (s0p, c0p) = (self.phi_c - PI + v * self.res).sin_cos();
         for (r, &(jp0, np)) in lobe.rows.iter().enumerate() {
             let it = lobe.it0 + r;
             let (s0, s1) = (self.sin_edges[it], self.sin_edges[it + 1]);
             let st = s0 + u * (s1 - s0);
             let ct = (1.0 - st * st).max(0.0).sqrt();
             let omega = self.res * (s1 - s0);
+            // The arc wraps at ±180° at most once (jp0 < n_phi, np ≤ n_phi).
             for c in 0..np as usize {
-                let jp = (jp0 as usize + c) % g.n_phi;
-                let (sp, cp) = (self.phi_c - PI + (jp as f64 + v) * self.res).sin_cos();
+                let mut jp = jp0 as usize + c;
+                if jp >= g.n_phi {
+                    jp -= g.n_phi;
+                }
+                let (cj, sj) = self.col_steps[jp];
+                let (cp, sp) = (c0p * cj - s0p * sj, s0p * cj + c0p * sj);
                 let wo = [ct * cp, ct * sp, st];
-                if dot(wo, lobe.axis) >= lobe.cos_rho {
-                    let p = s.first_facet_pdf(e.d, e.nf, e.inside, wo);
-                    if p > 0.0 {
-                        f((it * g.n_phi + jp) as u32, p * omega);
-                    }
+                let k = ch.n;
+                ch.x[k] = wo[0];
+                ch.y[k] = wo[1];
+                ch.z[k] = wo[2];
+                // Only the cone is scored (what `covers` tells the draws).
+                ch.mask[k] = if dot(wo, lobe.axis) >= lobe.cos_rho {
+                    1.0
+                } else {
+                    0.0
+                };
+                ch.bin[k] = (it * g.n_phi + jp) as u32;
+                ch.omega[k] = omega;
+                ch.n += 1;
+                if ch.n == CHUNK {
+                    ch.flush(&pdf, &mut f);
                 }
             }
+        }
+        ch.flush(&pdf, &mut f);
+    }
+}
+
+/// Directions per vectorised pass of [`LobeGrid::spread`].
+const CHUNK: usize = 64;
+
+/// A chunk of a window's directions (structure of arrays) and their densities.
+struct Chunk {
+    n: usize,
+    x: [f64; CHUNK],
+    y: [f64; CHUNK],
+    z: [f64; CHUNK],
+    mask: [f64; CHUNK],
+    p: [f64; CHUNK],
+    omega: [f64; CHUNK],
+    bin: [u32; CHUNK],
+}
+
+impl Chunk {
+    /// Evaluates the chunk's densities and hands each bin with mass to `f`; empties it.
+    #[inline]
+    fn flush(&mut self, pdf: &FacetPdf, f: &mut impl FnMut(u32, f64)) {
+        let n = self.n;
+        pdf.eval_many(&self.x, &self.y, &self.z, &self.mask, &mut self.p[..n]);
+        for i in 0..n {
+            if self.p[i] > 0.0 {
+                f(self.bin[i], self.p[i] * self.omega[i]);
+            }
+        }
+        self.n = 0;
+    }
+}
+
+impl Default for Chunk {
+    fn default() -> Self {
+        Self {
+            n: 0,
+            x: [0.0; CHUNK],
+            y: [0.0; CHUNK],
+            z: [0.0; CHUNK],
+            mask: [0.0; CHUNK],
+            p: [0.0; CHUNK],
+            omega: [0.0; CHUNK],
+            bin: [0; CHUNK],
         }
     }
 }

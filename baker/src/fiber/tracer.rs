@@ -429,13 +429,19 @@ impl<'a> Setup<'a> {
             } else {
                 None
             };
-            // An event scored in expectation is drawn once: the draw only scores what the
-            // expectation leaves out and picks the continuation.
-            let split = if ev.is_some() {
-                1
-            } else {
-                draws.at(ray.inside)
+            // The draws of an event scored in expectation only score what the expectation
+            // leaves out (and pick the continuation): from inside, as many of the event's
+            // draws as that share of it, 1 − covered, asks for (at least one); at the first
+            // event, whose reflection lobe the first-reflection pass scores, all of them (they
+            // split the entry).
+            let split = match &ev {
+                Some((_, Some(covered))) => {
+                    let d = draws.at(ray.inside);
+                    ((d as f64 * (1.0 - covered)).ceil() as u32).clamp(1, d)
+                }
+                _ => draws.at(ray.inside),
             };
+            let ev = ev.map(|(lobe, _)| lobe);
             if split <= 1 {
                 let s = self.boundary(ray.dir, n_out, &mut || u.uniform());
                 st.fallbacks += s.1 as u32;
@@ -505,7 +511,8 @@ impl<'a> Setup<'a> {
 
     /// The lobe of a freely leaving event that is scored in expectation: the first event's
     /// reflection, scored by the first-reflection pass ([`Setup::first_reflection`]), or an
-    /// exit from inside, scored here ([`Setup::expected_exits`]).
+    /// exit from inside, scored here ([`Setup::expected_exits`]) with the share of the event
+    /// it scored (its probability estimate).
     #[inline]
     fn expected(
         &self,
@@ -514,7 +521,7 @@ impl<'a> Setup<'a> {
         main: bool,
         u: &mut PathSampler,
         emit: &mut impl Exits,
-    ) -> Option<Lobe> {
+    ) -> Option<(Lobe, Option<f64>)> {
         if main && ray.events == 1 && self.first_reflection_pass() {
             let e = Event {
                 d: ray.dir,
@@ -524,14 +531,17 @@ impl<'a> Setup<'a> {
             self.lobes
                 .as_ref()
                 .and_then(|l| l.grid.lobe(&self.surface, &e))
+                .map(|lobe| (lobe, None))
         } else {
             self.expected_exits(ray, n_out, u, emit)
+                .map(|(lobe, covered)| (lobe, Some(covered)))
         }
     }
 
     /// Scores in expectation the first-facet exits of the event a ray meets from inside at
     /// the outward normal `n_out` (when the setup scores exits so and the boundary is rough)
-    /// and returns the lobe it covered.
+    /// and returns the lobe it covered and the probability it scored there (an unbiased
+    /// estimate, ≤ 1 up to its noise).
     #[inline]
     fn expected_exits(
         &self,
@@ -539,7 +549,7 @@ impl<'a> Setup<'a> {
         n_out: [f64; 3],
         u: &mut PathSampler,
         emit: &mut impl Exits,
-    ) -> Option<Lobe> {
+    ) -> Option<(Lobe, f64)> {
         let lg = self.lobes.as_ref().filter(|l| l.inside)?;
         if dot3(ray.dir, n_out) <= 0.0 {
             return None;
@@ -551,10 +561,12 @@ impl<'a> Setup<'a> {
         };
         let w = lg.grid.lobe(&self.surface, &e)?;
         let uv = (u.stream(), u.stream());
+        let mut covered = 0.0;
         lg.grid.spread(&w, &self.surface, &e, uv, |bin, mass| {
+            covered += mass;
             emit.leave_bin(bin, ray.path, ray.w * mass)
         });
-        Some(w)
+        Some((w, covered))
     }
 
     /// Whether the first event's reflection lobe is left to [`Setup::first_reflection`].
