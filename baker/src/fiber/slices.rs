@@ -20,10 +20,15 @@
 //! - **Expected-value exit scoring** (`expected_exits: inside | all`, [`super::lobe`]): at an
 //!   event met from inside whose exits leave the fiber for good, the exit lobe's first-facet
 //!   part (a density: [`super::Surface::first_facet_pdf`]) is scored over a cone of bins in
-//!   expectation, and the event is drawn once for the rest (other exits, the continuation).
-//!   `all` also scores the first event's reflection lobe R in expectation, by a pass of its
-//!   own launches (a 64th of the photons': R depends on the launch alone). Events it covers
-//!   are not split.
+//!   expectation, and the event's draws score the rest (exits through a second facet or
+//!   outside the cone) and pick the continuation: ⌈exit_draws·(1 − covered)⌉ of them, at
+//!   least one, where `covered` is the probability the expectation scored (the draw count
+//!   depends only on the event's own quadrature offset, so each draw's weight 1/count keeps it
+//!   unbiased). `all` also scores the first event's reflection lobe R in expectation, by a
+//!   pass of its own launches (a 64th of the photons': R depends on the launch alone); that
+//!   event keeps its `split` draws for the entry. It pays where lobes cover few bins: at 2°,
+//!   polyester (β ≈ 3°) and silk reach the thesis's noise faster with it, cotton (β ≈ 15°,
+//!   windows of thousands of bins) slower (`validation/bench-runs/2026-12-05-fiber-ev-speed`).
 //! - **Randomised Sobol' points** (`sampling: sobol`, [`crate::math::sampler`]): each batch one
 //!   scrambled and shifted Sobol' point set over the launch (incidence within the bin, entry
 //!   offset) and the first boundary events of every photon; each photon is exactly uniform,
