@@ -207,9 +207,9 @@ impl FacetPdf {
         }
     }
 
-    /// `out[i]` = the density at (x[i], y[i], z[i]) where `mask[i]` > 0, else 0, for i below
-    /// `out.len()`: bit for bit the values of [`FacetPdf::eval`], in one pass the compiler
-    /// vectorises (4 lanes where the processor has AVX2: the same IEEE operations lane by
+    /// `out[i]` = the density at (`x[i]`, `y[i]`, `z[i]`) where `mask[i]` > 0, else 0, for
+    /// i below `out.len()`: bit for bit the values of [`FacetPdf::eval`], in one pass the
+    /// compiler vectorises (4 lanes where the processor has AVX2: the same IEEE operations lane by
     /// lane, no fused multiply-add, so the same bits on every x86-64 machine).
     pub fn eval_many(&self, x: &[f64], y: &[f64], z: &[f64], mask: &[f64], out: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
