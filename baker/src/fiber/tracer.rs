@@ -429,11 +429,8 @@ impl<'a> Setup<'a> {
             } else {
                 None
             };
-            // The draws of an event scored in expectation only score what the expectation
-            // leaves out (and pick the continuation): from inside, as many of the event's
-            // draws as that share of it, 1 − covered, asks for (at least one); at the first
-            // event, whose reflection lobe the first-reflection pass scores, all of them (they
-            // split the entry).
+            // Draws of an event scored in expectation score only what it leaves out: from
+            // inside ⌈draws·(1 − covered)⌉ (≥ 1); at the first event all (they split the entry).
             let split = match &ev {
                 Some((_, Some(covered))) => {
                     let d = draws.at(ray.inside);
