@@ -269,13 +269,8 @@ impl FacetPdf {
     fn eval_inside(&self, wo: [f64; 3]) -> f64 {
         let won = dot(wo, self.nf);
         let (p_vis, a, wom, _, inv) = self.visible(axpy(self.eta, self.wi, wo), wo);
-        // Fresnel from the fiber (η) into air: fresnel::dielectric(η, 1, a) with its total
-        // internal reflection (cos θt = 0 gives R = 1 exactly) written without a branch.
-        let sin_t2 = self.eta * self.eta * (1.0 - a * a);
-        let cos_t = (1.0 - sin_t2).max(0.0).sqrt();
-        let rs = (self.eta * a - cos_t) / (self.eta * a + cos_t);
-        let rp = (self.eta * cos_t - a) / (self.eta * cos_t + a);
-        let r = 0.5 * (rs * rs + rp * rp);
+        // Fresnel from the fiber (η) into air, total internal reflection included.
+        let r = fresnel::reflectance_branch_free(self.eta, 1.0, a);
         let p = p_vis * (1.0 - r) * (-wom) * inv * inv;
         if won < 0.0 && wom < 0.0 && p_vis > 0.0 {
             p
@@ -289,13 +284,8 @@ impl FacetPdf {
     fn eval_outside(&self, wo: [f64; 3]) -> f64 {
         let won = dot(wo, self.nf);
         let (p_vis, a, wom, cos_m, _) = self.visible(axpy(1.0, self.wi, wo), wo);
-        // Fresnel from air into the fiber: fresnel::dielectric(1, η, a).
-        let e = 1.0 / self.eta;
-        let sin_t2 = e * e * (1.0 - a * a);
-        let cos_t = (1.0 - sin_t2).max(0.0).sqrt();
-        let rs = (a - self.eta * cos_t) / (a + self.eta * cos_t);
-        let rp = (cos_t - self.eta * a) / (cos_t + self.eta * a);
-        let r = 0.5 * (rs * rs + rp * rp);
+        // Fresnel from air into the fiber.
+        let r = fresnel::reflectance_branch_free(1.0, self.eta, a);
         // V-cavity G1(wo, m) (Heitz 2014, Eq. 5.4 there), [`g1_vcavity`] without its branch.
         let g1 = (2.0 * cos_m * won / wom).min(1.0);
         let p = p_vis * r * g1 / (4.0 * wom);

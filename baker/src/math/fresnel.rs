@@ -9,6 +9,20 @@
 //! give results one ulp or so apart. Every table, export and Monte Carlo result is pinned bit
 //! for bit, so each caller keeps its formula; neither is rewritten in terms of the other.
 
+/// [`dielectric`]'s reflectance with the same floating-point operations but no branch, so a
+/// loop over many cosines vectorises (the exit-lobe densities of `fiber::surface::FacetPdf`):
+/// under total internal reflection cos θt is 0 and the amplitude ratios are ±1, R = 1 exactly.
+/// Needs `ni` ≠ `nt` and `cos_i` > 0 (otherwise a meaningless value, which callers mask out).
+#[inline(always)]
+pub fn reflectance_branch_free(ni: f64, nt: f64, cos_i: f64) -> f64 {
+    let eta = ni / nt;
+    let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
+    let cos_t = (1.0 - sin_t2).max(0.0).sqrt();
+    let rs = (ni * cos_i - nt * cos_t) / (ni * cos_i + nt * cos_t);
+    let rp = (ni * cos_t - nt * cos_i) / (ni * cos_t + nt * cos_i);
+    0.5 * (rs * rs + rp * rp)
+}
+
 /// Reflectance for a ray arriving with cos θi = `cos_i` (> 0) from index `ni` into `nt`, and the
 /// cosine of the transmitted angle (0 under total internal reflection).
 #[inline]
