@@ -208,17 +208,20 @@ fn estimators_agree_with_plain_tracing() {
         ("cotton", rough(Shape::CottonRaw, 15.0, 1.555, 15.5, 1)),
         ("wool", wool),
     ];
-    // (split, exit_draws, expected exits, sampling)
-    use baker::fiber::slices::{ExpectedExits as Ev, Sampling as Sm};
+    // (split, exit_draws, expected exits, sampling, adaptive): adaptive runs under a target
+    // it cannot reach, so it traces a first pass that tallies the first-reflection pass apart,
+    // sets the share the noise asks for and traces on to the cap.
+    use baker::fiber::slices::{ExpectedExits as Ev, NoiseTarget, Sampling as Sm};
     let estimators = [
-        (4u32, 1u32, Ev::None, Sm::Random),
-        (1, 16, Ev::None, Sm::Random),
-        (2, 8, Ev::None, Sm::Random),
-        (1, 1, Ev::Inside, Sm::Random),
-        (1, 4, Ev::All, Sm::Random),
-        (4, 16, Ev::All, Sm::Random),
-        (1, 1, Ev::None, Sm::Sobol),
-        (1, 4, Ev::All, Sm::Sobol),
+        (4u32, 1u32, Ev::None, Sm::Random, false),
+        (1, 16, Ev::None, Sm::Random, false),
+        (2, 8, Ev::None, Sm::Random, false),
+        (1, 1, Ev::Inside, Sm::Random, false),
+        (1, 4, Ev::All, Sm::Random, false),
+        (4, 16, Ev::All, Sm::Random, false),
+        (4, 16, Ev::All, Sm::Random, true),
+        (1, 1, Ev::None, Sm::Sobol, false),
+        (1, 4, Ev::All, Sm::Sobol, false),
     ];
     let mut albedo_z = Vec::new();
     // Per estimator, every albedo z (signed): a bias too small for any one comparison moves
@@ -232,11 +235,19 @@ fn estimators_agree_with_plain_tracing() {
             .enumerate()
         {
             let inc = incident_of_bin(&grid, it, jp);
-            let run = |(split, exit_draws, expected_exits, sampling): (u32, u32, Ev, Sm),
+            let run = |(split, exit_draws, expected_exits, sampling, adaptive): (
+                u32,
+                u32,
+                Ev,
+                Sm,
+                bool,
+            ),
                        seed: u64| {
                 let s = BakeSettings {
                     res_deg: 10.0,
                     photons: 65_536,
+                    target: adaptive.then_some(NoiseTarget::RelSe(1e-6)),
+                    max_photons: 98_304,
                     seed,
                     split,
                     exit_draws,
@@ -249,14 +260,18 @@ fn estimators_agree_with_plain_tracing() {
                 };
                 trace_slice(fiber, inc, &grid, &channels, &s, seed, &Cancel::NEVER).unwrap()
             };
-            let plain = run((1, 1, Ev::None, Sm::Random), 100 + k as u64);
+            let plain = run((1, 1, Ev::None, Sm::Random, false), 100 + k as u64);
             let da = density(&plain, 3, grid.bins());
             for (e, &est) in estimators.iter().enumerate() {
                 let r = run(est, 200 + 10 * e as u64 + k as u64);
                 assert!(r.lost_weight == 0.0 && plain.lost_weight == 0.0);
                 let label = format!(
-                    "{name} wi{k} split {} exit_draws {} expected_exits {:?} sampling {:?}",
-                    est.0, est.1, est.2, est.3
+                    "{name} wi{k} split {} exit_draws {} expected_exits {:?} sampling {:?}{}",
+                    est.0,
+                    est.1,
+                    est.2,
+                    est.3,
+                    if est.4 { " adaptive" } else { "" }
                 );
                 for c in 0..channels.len() {
                     let se = plain.albedo_se[c].hypot(r.albedo_se[c]);

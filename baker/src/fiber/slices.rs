@@ -25,8 +25,11 @@
 //!   least one, where `covered` is the probability the expectation scored (the draw count
 //!   depends only on the event's own quadrature offset, so each draw's weight 1/count keeps it
 //!   unbiased). `all` also scores the first event's reflection lobe R in expectation, by a
-//!   pass of its own launches (a 64th of the photons': R depends on the launch alone); that
-//!   event keeps its `split` draws for the entry. It pays where lobes cover few bins: at 2°,
+//!   pass of its own launches at the points of a scrambled Sobol' set (R depends on the launch
+//!   and the lobe's quadrature offset alone): a 16th of the photons' in the first pass, then
+//!   the share the two passes' measured noise asks for (Neyman allocation, one launch per 64
+//!   to one per photon: near grazing incidence most of the power is reflected); that event
+//!   keeps its `split` draws for the entry. It pays where lobes cover few bins: at 2°,
 //!   polyester (β ≈ 3°) and silk reach the thesis's noise faster with it, cotton (β ≈ 15°,
 //!   windows of thousands of bins) slower (`validation/bench-runs/2026-12-05-fiber-ev-speed`).
 //! - **Randomised Sobol' points** (`sampling: sobol`, [`crate::math::sampler`]): each batch one
@@ -35,13 +38,16 @@
 //!   so every estimate stays unbiased, and batches stay independent for the errors.
 //! - **Adaptive allocation** (`target_rel_se`, `max_photons_per_direction`): after the first
 //!   `photons_per_direction`, groups of batches follow until the slice's median relative
-//!   error reaches the target ([`NoiseTarget`]) or the cap. The check sees the batches merged
+//!   error reaches the target ([`NoiseTarget`]) or the cap, each as many batches as the
+//!   error's 1/√batches decline says are still needed (at most 16). The check sees the batches merged
 //!   in order, so the stopping point does not depend on the thread count; it uses the median
 //!   over thousands of bins, a statistic nearly independent of any one bin's value, so the
 //!   bias of a data-dependent stop is far below the noise.
 //!
 //! Standard errors come from the spread of independent batches (batch means), which is
-//! valid for split, stratified and adaptively stopped estimators alike.
+//! valid for split, stratified and adaptively stopped estimators alike, and for batches whose
+//! first-reflection share differs (independent, equal means: the spread's expectation is
+//! still the sum of their variances).
 
 use std::time::Instant;
 
@@ -196,11 +202,15 @@ impl serde::Serialize for NoiseTarget {
 impl NoiseTarget {
     /// Whether a slice with noise `n` reaches the target.
     pub fn met_by(self, n: &Noise) -> bool {
-        let want = match self {
+        n.bins > 0 && n.median_rel_se <= self.rel_se(n)
+    }
+
+    /// The median relative error a slice with noise `n` must reach.
+    pub fn rel_se(self, n: &Noise) -> f64 {
+        match self {
             NoiseTarget::Thesis => n.thesis_rel_se,
             NoiseTarget::RelSe(x) => x,
-        };
-        n.bins > 0 && n.median_rel_se <= want
+        }
     }
 }
 
@@ -291,12 +301,19 @@ pub fn unit_len(n_wi: usize) -> usize {
     n_wi.div_ceil(48).max(4)
 }
 
-/// Photons per launch of the first-reflection pass ([`ExpectedExits::All`]): the reflection
-/// lobe depends on the launch alone (incidence within the bin, offset), a smooth function of
-/// three numbers, so a 64th of the photons' launches evaluate it with noise far below theirs
-/// (measured on silk at 2°: 64, 1,024 and 4,096 launches per 4,096-photon batch give the same
-/// noise, 5.86 %, 5.83 %, 5.82 %).
-const FIRST_REFLECTION_SHARE: u64 = 64;
+/// Photons per launch of the first-reflection pass ([`ExpectedExits::All`]) in a direction's
+/// first pass; after it, [`SliceSums::reflection_launches`] sets the share the two passes'
+/// measured noise asks for. Measured at 2° (`validation/bench-runs/2026-12-06-fiber-
+/// reflection-share`): silk's photons dominate its noise at every θi, so 64 and 16 give the
+/// same noise per second there, while polyester near grazing incidence (most of the power
+/// reflected) needs a launch per two photons.
+const FIRST_REFLECTION_SHARE: u64 = 16;
+
+/// The fewest photons per launch of the first-reflection pass after the first pass.
+const MIN_REFLECTION_SHARE: u64 = 1;
+
+/// The most photons per launch of the first-reflection pass after the first pass.
+const MAX_REFLECTION_SHARE: u64 = 64;
 
 /// Batches traced before their tallies are merged (bounds memory for wide sweeps).
 const GROUP: u64 = 16;
@@ -335,21 +352,36 @@ pub fn trace_slice(
         None => first,
     };
     let mut sums = SliceSums::new(grid, channels.len(), channels.per_variant());
+    let first_launches = match s.expected_exits.first_reflection() {
+        true => (s.batch / FIRST_REFLECTION_SHARE).max(16),
+        false => 0,
+    };
+    let mut launches = first_launches;
     let mut b0 = 0;
     while b0 < cap {
-        if b0 >= first && s.target.is_some_and(|t| sums.reached(grid, t)) {
-            break;
+        let mut group = GROUP;
+        if b0 >= first {
+            let Some(t) = s.target else { break };
+            match sums.batches_to(grid, t) {
+                None => break,
+                Some(more) => group = more.min(GROUP),
+            }
         }
         cancel.check()?;
-        let b1 = (b0 + GROUP).min(if b0 < first { first } else { cap });
+        let b1 = (b0 + group).min(if b0 < first { first } else { cap });
+        // The first pass tallies its reflection pass apart, to set the share that follows.
+        let apart = b0 < first && s.target.is_some() && launches > 0;
         let parts: Vec<BatchScore> = (b0..b1)
             .into_par_iter()
-            .map(|b| job.trace_batch(b))
+            .map(|b| job.trace_batch(b, launches, apart))
             .collect();
         for part in &parts {
             sums.add(part);
         }
         b0 = b1;
+        if b0 == first && apart {
+            launches = sums.reflection_launches(grid, s.batch, first_launches);
+        }
     }
     Ok(sums.into_result(grid, b0 * s.batch, start))
 }
@@ -367,6 +399,9 @@ struct SliceJob<'a> {
 /// The scores of one batch: weight per bin and channel, `[bin][channel]`, and its photons.
 struct BatchScore {
     local: Vec<f64>,
+    /// Per bin, when the batch tallies its first-reflection pass apart: that pass's part of
+    /// `local`'s sampling density of variant 0 (unnormalised); empty otherwise.
+    reflection: Vec<f64>,
     hits: u64,
     lost: f64,
     /// Σ g over the photons that met the fiber (their intercepted power).
@@ -375,19 +410,13 @@ struct BatchScore {
 
 impl SliceJob<'_> {
     /// Traces batch `b`: `s.batch` photons at stratified entry offsets, each exit binned for
-    /// every channel at once.
-    fn trace_batch(&self, b: u64) -> BatchScore {
+    /// every channel at once, and `launches` of the first-reflection pass (tallied apart as
+    /// well when `apart`).
+    fn trace_batch(&self, b: u64, launches: u64, apart: bool) -> BatchScore {
         let (grid, channels, s) = (self.grid, self.channels, self.s);
         let nch = channels.len();
         let mut rng = batch_rng(self.seed, b);
-        let mut sc = ChannelScore {
-            local: vec![0.0; grid.bins() * nch],
-            row: vec![0.0; nch],
-            last: f64::NAN,
-            channels,
-            grid: *grid,
-            phi_i: self.inc.phi_rad,
-        };
+        let mut sc = ChannelScore::new(grid, channels, self.inc.phi_rad);
         let (mut h, mut l, mut gsum) = (0u64, 0.0, 0.0);
         let n = s.batch;
         let scramble = (s.sampling == Sampling::Sobol).then(|| Scramble::draw(&mut rng));
@@ -407,20 +436,34 @@ impl SliceJob<'_> {
             l += st.lost;
         }
         // The first-reflection pass: launches of its own, each scoring the first event's
-        // reflection lobe in expectation for the batch's n photons.
-        let m_r = if s.expected_exits.first_reflection() {
-            (n / FIRST_REFLECTION_SHARE).max(16)
-        } else {
-            0
-        };
-        for k in 0..m_r {
-            let off = (k as f64 + uniform(rng.next_u64())) / m_r as f64;
-            let mut u = PathSampler::random(&mut rng);
-            self.setup
-                .first_reflection(&mut u, Some(off), n as f64 / m_r as f64, &mut sc);
+        // reflection lobe in expectation for the batch's n photons, at the points of one
+        // scrambled Sobol' set over the launch and the lobe's quadrature offset (each point
+        // uniform, so unbiased; the set's strata cut the pass's noise 1.2–2.3× against
+        // independent points on polyester).
+        let mut reflection = Vec::new();
+        if launches > 0 {
+            let mut own = apart.then(|| ChannelScore::new(grid, channels, self.inc.phi_rad));
+            let to = own.as_mut().unwrap_or(&mut sc);
+            let scramble = Scramble::draw(&mut rng);
+            for k in 0..launches {
+                let mut u = PathSampler::sobol(&mut rng, &scramble, k as u32);
+                let scale = n as f64 / launches as f64;
+                self.setup.first_reflection(&mut u, None, scale, to);
+            }
+            if let Some(own) = own {
+                let pv = channels.per_variant();
+                reflection = (own.local.chunks_exact(nch))
+                    .map(|c| c[..pv].iter().sum())
+                    .collect();
+                sc.local
+                    .iter_mut()
+                    .zip(&own.local)
+                    .for_each(|(a, x)| *a += x);
+            }
         }
         BatchScore {
             local: sc.local,
+            reflection,
             hits: h,
             lost: l,
             g_sum: gsum,
@@ -437,6 +480,20 @@ struct ChannelScore<'a> {
     channels: &'a Channels,
     grid: AngularGrid,
     phi_i: f64,
+}
+
+impl<'a> ChannelScore<'a> {
+    fn new(grid: &AngularGrid, channels: &'a Channels, phi_i: f64) -> Self {
+        let nch = channels.len();
+        ChannelScore {
+            local: vec![0.0; grid.bins() * nch],
+            row: vec![0.0; nch],
+            last: f64::NAN,
+            channels,
+            grid: *grid,
+            phi_i,
+        }
+    }
 }
 
 impl Exits for ChannelScore<'_> {
@@ -479,6 +536,10 @@ struct SliceSums {
     /// Per channel: Σ and Σ² over batches of the albedo.
     alb_s: Vec<f64>,
     alb_s2: Vec<f64>,
+    /// Per bin: Σ and Σ² over the batches that tallied it apart of the first-reflection
+    /// pass's part of `noise_s`.
+    refl_s: Vec<f64>,
+    refl_s2: Vec<f64>,
     hits: u64,
     lost: f64,
     used: u64,
@@ -500,6 +561,8 @@ impl SliceSums {
             dphi_s2: vec![0.0; grid.n_phi],
             alb_s: vec![0.0; nch],
             alb_s2: vec![0.0; nch],
+            refl_s: Vec::new(),
+            refl_s2: Vec::new(),
             hits: 0,
             lost: 0.0,
             used: 0,
@@ -534,6 +597,15 @@ impl SliceSums {
         for (j, x) in col.into_iter().enumerate() {
             self.dphi_s[j] += x;
             self.dphi_s2[j] += x * x;
+        }
+        if !part.reflection.is_empty() {
+            self.refl_s.resize(bins, 0.0);
+            self.refl_s2.resize(bins, 0.0);
+            for (b, r) in part.reflection.iter().enumerate() {
+                let x = r / (per_variant as f64 * hn);
+                self.refl_s[b] += x;
+                self.refl_s2[b] += x * x;
+            }
         }
         // One pass over the batch, each channel's sum in bin order.
         let mut alb = vec![0.0; nch];
@@ -588,22 +660,66 @@ impl SliceSums {
         }
     }
 
-    /// Whether the batches so far reach `target` ([`BakeSettings::target`]).
-    fn reached(&self, grid: &AngularGrid, target: NoiseTarget) -> bool {
-        target.met_by(&self.noise(grid, self.used as f64))
+    /// `None` when the batches so far reach `target` ([`BakeSettings::target`]); otherwise
+    /// the further batches that the error's 1/√batches decline says reach it (at least one).
+    fn batches_to(&self, grid: &AngularGrid, target: NoiseTarget) -> Option<u64> {
+        let n = self.noise(grid, self.used as f64);
+        if target.met_by(&n) {
+            return None;
+        }
+        let ratio = n.median_rel_se / target.rel_se(&n);
+        let more = self.used as f64 * (ratio * ratio - 1.0);
+        Some(if more.is_finite() {
+            more.ceil().max(1.0) as u64
+        } else {
+            u64::MAX
+        })
+    }
+
+    /// Launches of the first-reflection pass per batch for the batches after the first pass,
+    /// which ran `launches` per batch and tallied that pass apart: Neyman allocation of two
+    /// independent estimators of equal cost per unit (a launch costs about a photon: 7.7 and
+    /// 7.2 µs on silk, 3.3 and 6.6 µs on polyester). With A_r and A_p the two passes' shares
+    /// of Σ_b var_b / mean_b² over the noise's bins, the share s = √(A_r·s₀/A_p) minimises
+    /// the error at equal work; rounded to a power of two (the Sobol' set stays a net)
+    /// between batch/[`MAX_REFLECTION_SHARE`] and batch/[`MIN_REFLECTION_SHARE`].
+    fn reflection_launches(&self, grid: &AngularGrid, batch: u64, launches: u64) -> u64 {
+        let nbf = self.used as f64;
+        let (mut a, mut a_r) = (0.0, 0.0);
+        for b in self.kept_bins(grid, nbf) {
+            let m = self.noise_s[b] / nbf;
+            let var = |s: f64, s2: f64| (s2 / nbf - (s / nbf).powi(2)).max(0.0);
+            a += var(self.noise_s[b], self.noise_s2[b]) / (m * m);
+            a_r += var(self.refl_s[b], self.refl_s2[b]) / (m * m);
+        }
+        let a_p = (a - a_r).max(1e-3 * a);
+        let s0 = launches as f64 / batch as f64;
+        let share = (a_r * s0 / a_p).sqrt();
+        let lo = (batch / MAX_REFLECTION_SHARE).max(16);
+        let hi = (batch / MIN_REFLECTION_SHARE).max(lo);
+        if share.is_nan() || share <= 0.0 {
+            return lo;
+        }
+        let m = (2f64.powf((share * batch as f64).log2().round())) as u64;
+        m.clamp(lo, hi)
+    }
+
+    /// The bins the noise is taken over: density ≥ 1 % of the maximum (per steradian).
+    fn kept_bins(&self, grid: &AngularGrid, nbf: f64) -> Vec<usize> {
+        let dens: Vec<f64> = (0..self.bins)
+            .map(|b| self.noise_s[b] / nbf / grid.solid_angle(b / grid.n_phi))
+            .collect();
+        let dmax = dens.iter().copied().fold(0.0, f64::max);
+        (0..self.bins)
+            .filter(|&b| dmax > 0.0 && dens[b] >= 0.01 * dmax)
+            .collect()
     }
 
     /// Noise over bins with density ≥ 1 % of the maximum (density per steradian), and the
     /// thesis's noise over the same bins ([`NoiseTarget::Thesis`]).
     fn noise(&self, grid: &AngularGrid, nbf: f64) -> Noise {
         let (noise_s, noise_s2) = (&self.noise_s, &self.noise_s2);
-        let dens: Vec<f64> = (0..self.bins)
-            .map(|b| noise_s[b] / nbf / grid.solid_angle(b / grid.n_phi))
-            .collect();
-        let dmax = dens.iter().copied().fold(0.0, f64::max);
-        let kept: Vec<usize> = (0..self.bins)
-            .filter(|&b| dmax > 0.0 && dens[b] >= 0.01 * dmax)
-            .collect();
+        let kept = self.kept_bins(grid, nbf);
         let mut rel: Vec<f64> = (kept.iter())
             .map(|&b| batch_se(noise_s[b], noise_s2[b], nbf) / (noise_s[b] / nbf))
             .collect();
@@ -637,4 +753,62 @@ fn quantile(v: &mut [f64], p: f64) -> f64 {
 fn batch_se(s: f64, s2: f64, nbf: f64) -> f64 {
     let m = s / nbf;
     ((s2 / nbf - m * m).max(0.0) / (nbf - 1.0)).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sums of `batches` batches of a one-channel slice on a 30° grid: every bin's photon part
+    /// `1 + sp·z` and reflection part `1 + sr·z'` (z, z' = ±1 alternating, independent
+    /// patterns), the reflection part tallied apart.
+    fn sums(sp: f64, sr: f64, batches: usize) -> (AngularGrid, SliceSums) {
+        let grid = AngularGrid::new(30.0).unwrap();
+        let mut sums = SliceSums::new(&grid, 1, 1);
+        for k in 0..batches {
+            let zp = if k % 2 == 0 { 1.0 } else { -1.0 };
+            let zr = if (k / 2) % 2 == 0 { 1.0 } else { -1.0 };
+            let reflection = vec![1.0 + sr * zr; grid.bins()];
+            let local = reflection.iter().map(|r| r + 1.0 + sp * zp).collect();
+            sums.add(&BatchScore {
+                local,
+                reflection,
+                hits: 1,
+                lost: 0.0,
+                g_sum: 1.0,
+            });
+        }
+        (grid, sums)
+    }
+
+    /// Neyman allocation: s = √(A_r·s₀/A_p), rounded to a power of two and clamped.
+    #[test]
+    fn reflection_share_follows_the_two_passes_noise() {
+        // Equal noise at s₀ = 1/16: s = 1/4.
+        let (g, s) = sums(0.2, 0.2, 8);
+        assert_eq!(s.reflection_launches(&g, 4096, 256), 1024);
+        // The reflection pass 4× noisier (16× the variance): s = 1, the most.
+        let (g, s) = sums(0.05, 0.2, 8);
+        assert_eq!(s.reflection_launches(&g, 4096, 256), 4096);
+        // The reflection pass noiseless: the fewest, a launch per 64 photons.
+        let (g, s) = sums(0.2, 0.0, 8);
+        assert_eq!(s.reflection_launches(&g, 4096, 256), 64);
+        // The photons' noise 4× the reflection's: s = √(1/16 / 16) = 1/16.
+        let (g, s) = sums(0.4, 0.1, 8);
+        assert_eq!(s.reflection_launches(&g, 4096, 256), 256);
+    }
+
+    /// The batches still needed follow the error's 1/√batches decline.
+    #[test]
+    fn batches_to_extrapolates_the_error() {
+        // Relative error per batch 0.2/2 = 0.1; over 8 batches 0.1/√7 (batch means).
+        let (g, s) = sums(0.2, 0.0, 8);
+        let now = s.noise(&g, 8.0).median_rel_se;
+        assert!((now - 0.1 / 7f64.sqrt()).abs() < 1e-12, "{now}");
+        assert_eq!(s.batches_to(&g, NoiseTarget::RelSe(now)), None);
+        // Half the error: four times the batches, 24 more.
+        assert_eq!(s.batches_to(&g, NoiseTarget::RelSe(0.5 * now)), Some(24));
+        // Just short of it: one more.
+        assert_eq!(s.batches_to(&g, NoiseTarget::RelSe(0.999 * now)), Some(1));
+    }
 }

@@ -308,7 +308,8 @@ impl<'a> Setup<'a> {
     /// The first-event reflection lobe of one launch, scored in expectation with weight
     /// `scale`·g: the part of [`Setup::photon`]'s score that the photons leave to this pass
     /// when the setup scores it so ([`ExpectedExits::first_reflection`]). Draws from `u` as a
-    /// launch does, then the quadrature offset.
+    /// launch does, then the quadrature offset as the first event's two numbers (a Sobol'
+    /// point's, for a point set).
     pub(crate) fn first_reflection(
         &self,
         u: &mut PathSampler,
@@ -334,7 +335,8 @@ impl<'a> Setup<'a> {
         let Some(lobe) = lg.grid.lobe(&self.surface, &e) else {
             return;
         };
-        let uv = (u.stream(), u.stream());
+        u.begin_event(0);
+        let uv = (u.uniform(), u.uniform());
         lg.grid.spread(&lobe, &self.surface, &e, uv, |bin, mass| {
             emit.leave_bin(bin, 0.0, scale * g * mass)
         });
