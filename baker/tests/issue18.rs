@@ -98,6 +98,91 @@ fn issue18_rgb_albedo_stays_within_one_and_the_manifest_reports_ranges_noise_and
     );
 }
 
+/// Adaptive allocation: the HDF5 file records what each stored direction reached (photons
+/// launched, its slice's median and thesis relative errors), and those records agree with
+/// the target, the cap and the manifest.
+#[test]
+fn issue18_each_direction_records_its_photons_and_noise() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (target, cap) = (0.08, 16_384u64);
+    let extra = format!(", target_rel_se: {target}, max_photons_per_direction: {cap}");
+    let out = common::bake_spec(tmp.path(), "adaptive", &spec(&extra), 2);
+    let e = &manifest(&out)["entries"][0];
+    let h = hdf5_metno::File::open(out.join("silk/silk.h5")).unwrap();
+    let read = |t: &str, d: &str| -> Vec<f64> {
+        let ds = h.group(t).unwrap().dataset(d).unwrap();
+        match d {
+            "photons" => ds
+                .read_raw::<u64>()
+                .unwrap()
+                .iter()
+                .map(|&x| x as f64)
+                .collect(),
+            _ => ds
+                .read_raw::<f32>()
+                .unwrap()
+                .iter()
+                .map(|&x| f64::from(x))
+                .collect(),
+        }
+    };
+    let n = e["stored_directions"].as_u64().unwrap() as usize;
+    let mut sum = vec![0.0; n];
+    let mut at_target = 0;
+    let (mut below_cap, mut at_cap) = (0, 0);
+    for t in &TABLES[..2] {
+        let (p, med) = (read(t, "photons"), read(t, "median_rel_se"));
+        let thesis = read(t, "thesis_rel_se");
+        assert_eq!((p.len(), med.len(), thesis.len()), (n, n, n));
+        for i in 0..n {
+            assert!(
+                p[i] >= 4096.0 && p[i] <= cap as f64 && p[i] % 4096.0 == 0.0,
+                "{}",
+                p[i]
+            );
+            assert!(
+                med[i] > 0.0 && thesis[i] > 0.0,
+                "{t} {i}: {} {}",
+                med[i],
+                thesis[i]
+            );
+            // f32 records of an f64 comparison.
+            if p[i] < cap as f64 {
+                assert!(
+                    med[i] <= target * (1.0 + 1e-6),
+                    "{t} {i}: stopped at {}",
+                    med[i]
+                );
+                below_cap += 1;
+            } else {
+                at_cap += 1;
+            }
+            sum[i] += p[i];
+        }
+        if *t == "section-00" {
+            at_target = med.iter().filter(|&&m| m <= target).count();
+        }
+    }
+    // The bake stopped some directions early and took others to the cap (else the records
+    // show nothing).
+    assert!(
+        below_cap > 0 && at_cap > 0,
+        "{below_cap} below the cap, {at_cap} at it"
+    );
+    assert_eq!(read("average", "photons"), sum);
+    assert!(read("average", "median_rel_se").iter().all(|m| m.is_nan()));
+    let p = &e["photons"];
+    assert_eq!(p["total"].as_f64(), Some(sum.iter().sum::<f64>()));
+    assert_eq!(
+        p["max"].as_f64(),
+        Some(sum.iter().copied().fold(0.0, f64::max))
+    );
+    assert_eq!(
+        e["noise"]["directions_at_target"].as_u64(),
+        Some(at_target as u64)
+    );
+}
+
 /// Spectral tables are never mapped (each wavelength's albedo is ≤ 1 by itself).
 #[test]
 fn issue18_spectral_tables_are_not_mapped() {

@@ -53,7 +53,8 @@ pub struct EntryReport {
     #[serde(skip)]
     pub photons_per_s: f64,
     /// Photons launched per stored direction (all its sections; units taken from the cache
-    /// included).
+    /// included); each direction's own count and noise are in the HDF5 file (`photons`,
+    /// `median_rel_se`, `thesis_rel_se`).
     pub photons: PhotonsUsed,
     /// Per-bin relative standard error of the sampling density (section 0).
     pub noise: NoiseReport,
@@ -516,9 +517,8 @@ fn write_unit(
         // Encoding and writing a direction of a wide sweep takes a while: a signal
         // stops here too (the HDF5 file being written is dropped).
         runner.cancel.check()?;
-        tallies
-            .photons
-            .push(res.iter().map(|r| r.launched).sum::<u64>());
+        let photons = res.iter().map(|r| r.launched).sum::<u64>();
+        tallies.photons.push(photons);
         tallies.noise.0 += res[0].noise.median_rel_se;
         tallies.noise.1 += res[0].noise.p90_rel_se;
         tallies.noise.2 += res[0].noise.bins as f64;
@@ -537,7 +537,10 @@ fn write_unit(
                 tallies.clip[t].add(&f);
                 factors.extend(f);
             }
-            o.push(i, r, &s.grid)?;
+            // Tables past the sections' are their average.
+            let traced = t < s.fibers.len();
+            let launched = if traced { r.launched } else { photons };
+            o.push(i, r, &s.grid, launched, traced)?;
             // As stored (f32).
             for (range, &a) in tallies.albedo.iter_mut().zip(&r.albedo) {
                 let a = f64::from(a as f32);

@@ -91,6 +91,10 @@ pub struct TableOut {
     cdf_phi: h5::Dataset,
     albedo: Vec<f32>,
     albedo_se: Vec<f32>,
+    /// Per stored direction: photons launched, and the slice's noise (median and thesis
+    /// relative error; NaN for an average of sections, which has no batches of its own).
+    photons: Vec<u64>,
+    noise: Vec<[f32; 2]>,
     group: h5::Group,
     quantise_to_se: f64,
     zstd_level: ZstdLevel,
@@ -151,6 +155,8 @@ impl TableOut {
             cdf_phi,
             albedo: Vec::new(),
             albedo_se: Vec::new(),
+            photons: Vec::new(),
+            noise: Vec::new(),
             group: g,
             quantise_to_se: l.quantise_to_se,
             zstd_level: l.zstd_level,
@@ -158,8 +164,16 @@ impl TableOut {
     }
 
     /// Stored direction `i`'s slice: encoded into the stream, decoded values and sampling
-    /// CDFs into the HDF5 group.
-    pub fn push(&mut self, i: usize, r: &SliceResult, grid: &AngularGrid) -> anyhow::Result<()> {
+    /// CDFs into the HDF5 group; what the direction reached (`photons` launched for it, and
+    /// the slice's own noise when it was traced, not averaged) into its records.
+    pub fn push(
+        &mut self,
+        i: usize,
+        r: &SliceResult,
+        grid: &AngularGrid,
+        photons: u64,
+        traced: bool,
+    ) -> anyhow::Result<()> {
         let (nt, np) = (grid.n_theta, grid.n_phi);
         let nv = self.writer.dir.variants.len();
         let decoded = push_slice(
@@ -171,6 +185,11 @@ impl TableOut {
         )?;
         self.albedo.extend(r.albedo.iter().map(|&x| x as f32));
         self.albedo_se.extend(r.albedo_se.iter().map(|&x| x as f32));
+        self.photons.push(photons);
+        self.noise.push(match traced && r.noise.bins > 0 {
+            true => [r.noise.median_rel_se as f32, r.noise.thesis_rel_se as f32],
+            false => [f32::NAN; 2],
+        });
         h5out::write_chunk_f32(&self.f, &[i, 0, 0, 0, 0], &decoded)?;
         let (ct, cp, _) = bcsdf::sampling_cdfs(&self.writer.dir, &decoded);
         let ct: Vec<f32> = ct.iter().flatten().map(|&x| x as f32).collect();
@@ -207,6 +226,14 @@ impl TableOut {
             "directional albedo Lambda(w_i): fraction of the intercepted power that leaves",
         )?;
         let albedo_se = h5out::array(g, "albedo_se", &[n_wi, nv, nc], &self.albedo_se)?;
+        let photons = h5out::array(g, "photons", &[n_wi], &self.photons)?;
+        h5out::text_attr(&photons, "description", "photons launched for each stored incoming direction (an average of sections: their sum); adaptive allocation (target_rel_se) sets it per direction")?;
+        let median: Vec<f32> = self.noise.iter().map(|n| n[0]).collect();
+        let median = h5out::array(g, "median_rel_se", &[n_wi], &median)?;
+        h5out::text_attr(&median, "description", "median over the bins with density >= 1 % of the slice's maximum of the per-bin relative standard error of the sampling density (variant 0); NaN for an average of sections")?;
+        let thesis: Vec<f32> = self.noise.iter().map(|n| n[1]).collect();
+        let thesis = h5out::array(g, "thesis_rel_se", &[n_wi], &thesis)?;
+        h5out::text_attr(&thesis, "description", "the same median for plain sampling with 16 M photons (the thesis's noise): a direction reached it where median_rel_se <= thesis_rel_se")?;
         let area = h5out::array(g, "area_um", &[grid.n_phi], &self.writer.dir.area_um)?;
         h5out::text_attr(&area, "units", "um")?;
         h5out::text_attr(&area, "description", "projected width per unit length seen from azimuth phi (A(w) of Eq. 17 before sin(w, w_f))")?;
@@ -241,22 +268,31 @@ impl TableOut {
             (&phi, "degree"),
             (&albedo, "1"),
             (&albedo_se, "1"),
+            (&photons, "1"),
+            (&median, "1"),
+            (&thesis, "1"),
             (ct, "1"),
             (cp, "1"),
             (&wmap, "1"),
         ] {
             h5out::text_attr(d, "units", u)?;
         }
-        h5out::attach_scale(
-            &th_i,
-            "theta_i_deg",
-            &[(f, 0), (&albedo, 0), (&albedo_se, 0), (ct, 0), (cp, 0)],
-        )?;
-        h5out::attach_scale(
-            &ph_i,
-            "phi_i_deg",
-            &[(f, 0), (&albedo, 0), (&albedo_se, 0), (ct, 0), (cp, 0)],
-        )?;
+        for (scale, name) in [(&th_i, "theta_i_deg"), (&ph_i, "phi_i_deg")] {
+            h5out::attach_scale(
+                scale,
+                name,
+                &[
+                    (f, 0),
+                    (&albedo, 0),
+                    (&albedo_se, 0),
+                    (&photons, 0),
+                    (&median, 0),
+                    (&thesis, 0),
+                    (ct, 0),
+                    (cp, 0),
+                ],
+            )?;
+        }
         h5out::attach_scale(
             &var,
             "variant",
