@@ -399,8 +399,8 @@ struct SliceJob<'a> {
 /// The scores of one batch: weight per bin and channel, `[bin][channel]`, and its photons.
 struct BatchScore {
     local: Vec<f64>,
-    /// Per bin, when the batch tallies its first-reflection pass apart: that pass's part of
-    /// `local`'s sampling density of variant 0 (unnormalised); empty otherwise.
+    /// When the batch tallies its first-reflection pass apart: that pass's part of `local`
+    /// (same layout); empty otherwise.
     reflection: Vec<f64>,
     hits: u64,
     lost: f64,
@@ -414,7 +414,6 @@ impl SliceJob<'_> {
     /// well when `apart`).
     fn trace_batch(&self, b: u64, launches: u64, apart: bool) -> BatchScore {
         let (grid, channels, s) = (self.grid, self.channels, self.s);
-        let nch = channels.len();
         let mut rng = batch_rng(self.seed, b);
         let mut sc = ChannelScore::new(grid, channels, self.inc.phi_rad);
         let (mut h, mut l, mut gsum) = (0u64, 0.0, 0.0);
@@ -445,20 +444,17 @@ impl SliceJob<'_> {
             let mut own = apart.then(|| ChannelScore::new(grid, channels, self.inc.phi_rad));
             let to = own.as_mut().unwrap_or(&mut sc);
             let scramble = Scramble::draw(&mut rng);
+            let scale = n as f64 / launches as f64;
             for k in 0..launches {
                 let mut u = PathSampler::sobol(&mut rng, &scramble, k as u32);
-                let scale = n as f64 / launches as f64;
                 self.setup.first_reflection(&mut u, None, scale, to);
             }
             if let Some(own) = own {
-                let pv = channels.per_variant();
-                reflection = (own.local.chunks_exact(nch))
-                    .map(|c| c[..pv].iter().sum())
-                    .collect();
                 sc.local
                     .iter_mut()
                     .zip(&own.local)
                     .for_each(|(a, x)| *a += x);
+                reflection = own.local;
             }
         }
         BatchScore {
@@ -581,6 +577,10 @@ impl SliceSums {
         // Normalise by the intercepted power Σg (the spread weights of the photons that
         // met the fiber), so Λ is exactly the fraction of that power which leaves.
         let hn = if g > 0.0 { g } else { 1.0 };
+        // Bin b's sampling density of variant 0 in a batch's scores.
+        let density = |local: &[f64], b: usize| {
+            local[b * nch..b * nch + per_variant].iter().sum::<f64>() / (per_variant as f64 * hn)
+        };
         for (a, x) in self.sum.iter_mut().zip(local) {
             *a += x;
         }
@@ -588,8 +588,7 @@ impl SliceSums {
         // every channel's albedo.
         let mut col = vec![0.0; self.n_phi];
         for b in 0..bins {
-            let x = local[b * nch..b * nch + per_variant].iter().sum::<f64>()
-                / (per_variant as f64 * hn);
+            let x = density(local, b);
             self.noise_s[b] += x;
             self.noise_s2[b] += x * x;
             col[b % self.n_phi] += x;
@@ -601,8 +600,8 @@ impl SliceSums {
         if !part.reflection.is_empty() {
             self.refl_s.resize(bins, 0.0);
             self.refl_s2.resize(bins, 0.0);
-            for (b, r) in part.reflection.iter().enumerate() {
-                let x = r / (per_variant as f64 * hn);
+            for b in 0..bins {
+                let x = density(&part.reflection, b);
                 self.refl_s[b] += x;
                 self.refl_s2[b] += x * x;
             }
@@ -688,9 +687,8 @@ impl SliceSums {
         let (mut a, mut a_r) = (0.0, 0.0);
         for b in self.kept_bins(grid, nbf) {
             let m = self.noise_s[b] / nbf;
-            let var = |s: f64, s2: f64| (s2 / nbf - (s / nbf).powi(2)).max(0.0);
-            a += var(self.noise_s[b], self.noise_s2[b]) / (m * m);
-            a_r += var(self.refl_s[b], self.refl_s2[b]) / (m * m);
+            a += batch_var(self.noise_s[b], self.noise_s2[b], nbf) / (m * m);
+            a_r += batch_var(self.refl_s[b], self.refl_s2[b], nbf) / (m * m);
         }
         let a_p = (a - a_r).max(1e-3 * a);
         let s0 = launches as f64 / batch as f64;
@@ -749,10 +747,15 @@ fn quantile(v: &mut [f64], p: f64) -> f64 {
     }
 }
 
+/// Variance of one batch mean, from `nbf` batch means with sums `s` and `s2`.
+fn batch_var(s: f64, s2: f64, nbf: f64) -> f64 {
+    let m = s / nbf;
+    (s2 / nbf - m * m).max(0.0)
+}
+
 /// Standard error of the mean of `nbf` batch means with sums `s` and `s2`.
 fn batch_se(s: f64, s2: f64, nbf: f64) -> f64 {
-    let m = s / nbf;
-    ((s2 / nbf - m * m).max(0.0) / (nbf - 1.0)).sqrt()
+    (batch_var(s, s2, nbf) / (nbf - 1.0)).sqrt()
 }
 
 #[cfg(test)]
