@@ -27,15 +27,15 @@
 //! Cost: a window holds tens (polyester at 2°) to thousands (cotton) of bins, so the densities
 //! dominate. The bins' directions come from per-grid tables (sin and cos of the θ edges and of
 //! the column steps, the ring's azimuths), and the densities of 64 bins at a time from one
-//! branch-free, vectorised pass ([`FacetPdf::eval_many`]: the same bits on every machine).
+//! branch-free, vectorised pass in single precision ([`FacetPdf::eval_many`]: the same bits
+//! on every machine).
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use smallvec::SmallVec;
 
-use super::surface::{basis, dot, normalize, reflect, refract, FacetPdf};
+use super::surface::{basis, dot, normalize, reflect, FacetPdf};
 use super::Surface;
-use crate::math::fresnel;
 use formats::AngularGrid;
 
 /// Slope radius of the window's ring, in units of the RMS slope α.
@@ -101,6 +101,24 @@ impl LobeGrid {
     /// smooth, the mean normal reflects the photon back inside (total internal reflection),
     /// or the window would exceed [`MAX_WINDOW_BINS`].
     pub fn lobe(&self, s: &Surface, e: &Event) -> Option<Lobe> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked above).
+            return unsafe { self.lobe_avx2(s, e) };
+        }
+        self.lobe_in(s, e)
+    }
+
+    /// [`LobeGrid::lobe`] where the processor has AVX2: the same IEEE operations (no fused
+    /// multiply-add), the facet loop 4 lanes wide and `floor` one instruction.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn lobe_avx2(&self, s: &Surface, e: &Event) -> Option<Lobe> {
+        self.lobe_in(s, e)
+    }
+
+    #[inline(always)]
+    fn lobe_in(&self, s: &Surface, e: &Event) -> Option<Lobe> {
         if s.alpha == 0.0 {
             return None;
         }
@@ -109,30 +127,30 @@ impl LobeGrid {
         // farthest. Under total internal reflection at the mean normal the exits come from the
         // tilted facets only (grazing lobes), which the rings still find.
         let (t, b) = basis(e.nf);
-        let mut exits: SmallVec<[[f64; 3]; 64]> = SmallVec::new();
-        exits.extend(exit_through(s, e, e.nf));
-        for radius in [s.alpha, WINDOW_SLOPES * s.alpha] {
-            for &(ca, sa) in &self.ring {
-                let (sx, sy) = (radius * ca, radius * sa);
-                let m = normalize([
-                    e.nf[0] + sx * t[0] + sy * b[0],
-                    e.nf[1] + sx * t[1] + sy * b[1],
-                    e.nf[2] + sx * t[2] + sy * b[2],
-                ]);
-                exits.extend(exit_through(s, e, m));
+        let mut ring = Ring::default();
+        for (r, radius) in [s.alpha, WINDOW_SLOPES * s.alpha].into_iter().enumerate() {
+            for (k, &(ca, sa)) in self.ring.iter().enumerate() {
+                let lane = 1 + r * RING + k;
+                (ring.sx[lane], ring.sy[lane]) = (radius * ca, radius * sa);
             }
         }
-        if exits.is_empty() {
-            return None;
+        ring.exits(s, e, (t, b));
+        let exit = |l: usize| [ring.w[0][l], ring.w[1][l], ring.w[2][l]];
+        let mut sum = [0.0; 3];
+        let mut any = false;
+        for l in (0..RING_LANES).filter(|&l| ring.ok[l]) {
+            let w = exit(l);
+            sum = [sum[0] + w[0], sum[1] + w[1], sum[2] + w[2]];
+            any = true;
         }
-        let sum = exits
-            .iter()
-            .fold([0.0; 3], |a, w| [a[0] + w[0], a[1] + w[1], a[2] + w[2]]);
-        if dot(sum, sum) < 1e-12 {
+        if !any || dot(sum, sum) < 1e-12 {
             return None;
         }
         let axis = normalize(sum);
-        let cos_rho = exits.iter().map(|w| dot(*w, axis)).fold(1.0f64, f64::min);
+        let cos_rho = (0..RING_LANES)
+            .filter(|&l| ring.ok[l])
+            .map(|l| dot(exit(l), axis))
+            .fold(1.0f64, f64::min);
         // The window holds at least the cone's solid angle 2π(1 − cos ρ) in bins of at most
         // res² each: past the limit already, it is not laid out.
         if TAU * (1.0 - cos_rho) > MAX_WINDOW_BINS as f64 * self.res * self.res {
@@ -250,15 +268,12 @@ impl LobeGrid {
                 let (cp, sp) = (c0p * cj - s0p * sj, s0p * cj + c0p * sj);
                 let wo = [ct * cp, ct * sp, st];
                 let k = ch.n;
-                ch.x[k] = wo[0];
-                ch.y[k] = wo[1];
-                ch.z[k] = wo[2];
-                // Only the cone is scored (what `covers` tells the draws).
-                ch.mask[k] = if dot(wo, lobe.axis) >= lobe.cos_rho {
-                    1.0
-                } else {
-                    0.0
-                };
+                ch.x[k] = wo[0] as f32;
+                ch.y[k] = wo[1] as f32;
+                ch.z[k] = wo[2] as f32;
+                // Only the cone is scored (what `covers` tells the draws), decided in double
+                // precision as `covers` decides it.
+                ch.mask[k] = dot(wo, lobe.axis) >= lobe.cos_rho;
                 ch.bin[k] = (it * g.n_phi + jp) as u32;
                 ch.omega[k] = omega;
                 ch.n += 1;
@@ -277,11 +292,11 @@ const CHUNK: usize = 64;
 /// A chunk of a window's directions (structure of arrays) and their densities.
 struct Chunk {
     n: usize,
-    x: [f64; CHUNK],
-    y: [f64; CHUNK],
-    z: [f64; CHUNK],
-    mask: [f64; CHUNK],
-    p: [f64; CHUNK],
+    x: [f32; CHUNK],
+    y: [f32; CHUNK],
+    z: [f32; CHUNK],
+    mask: [bool; CHUNK],
+    p: [f32; CHUNK],
     omega: [f64; CHUNK],
     bin: [u32; CHUNK],
 }
@@ -294,7 +309,7 @@ impl Chunk {
         pdf.eval_many(&self.x, &self.y, &self.z, &self.mask, &mut self.p[..n]);
         for i in 0..n {
             if self.p[i] > 0.0 {
-                f(self.bin[i], self.p[i] * self.omega[i]);
+                f(self.bin[i], f64::from(self.p[i]) * self.omega[i]);
             }
         }
         self.n = 0;
@@ -308,7 +323,7 @@ impl Default for Chunk {
             x: [0.0; CHUNK],
             y: [0.0; CHUNK],
             z: [0.0; CHUNK],
-            mask: [0.0; CHUNK],
+            mask: [false; CHUNK],
             p: [0.0; CHUNK],
             omega: [0.0; CHUNK],
             bin: [0; CHUNK],
@@ -331,25 +346,70 @@ pub struct Lobe {
     pub cos_rho: f64,
 }
 
-/// The direction a photon of event `e` leaves in at facet `m`, if it leaves there: refracted
-/// out from inside (None under total internal reflection), reflected from outside.
-fn exit_through(s: &Surface, e: &Event, m: [f64; 3]) -> Option<[f64; 3]> {
-    let cos_i = -dot(e.d, m);
-    if cos_i <= 0.0 {
-        return None;
-    }
-    let wo = if e.inside {
-        let (r, cos_t) = fresnel::dielectric(s.eta, 1.0, cos_i);
-        if r >= 1.0 {
-            return None;
+/// Facets probed per event: the mean normal, then [`RING`] on each of the two rings.
+const RING_LANES: usize = 1 + 2 * RING;
+
+/// The facet normals [`LobeGrid::lobe`] probes (structure of arrays) and the directions a
+/// photon leaves in through each, where it leaves there.
+struct Ring {
+    /// Slopes of the facets along the basis vectors t, b of the mean normal (lane 0: 0, 0).
+    sx: [f64; RING_LANES],
+    sy: [f64; RING_LANES],
+    w: [[f64; RING_LANES]; 3],
+    ok: [bool; RING_LANES],
+}
+
+impl Default for Ring {
+    fn default() -> Self {
+        Self {
+            sx: [0.0; RING_LANES],
+            sy: [0.0; RING_LANES],
+            w: [[0.0; RING_LANES]; 3],
+            ok: [false; RING_LANES],
         }
-        refract(e.d, m, s.eta, cos_i, cos_t)
-    } else {
-        reflect(e.d, m, cos_i)
-    };
-    let side = dot(wo, e.nf);
-    let leaves = if e.inside { side < 0.0 } else { side > 0.0 };
-    leaves.then_some(wo)
+    }
+}
+
+impl Ring {
+    /// For every facet m ∝ nf + sx·t + sy·b (lane 0: the mean normal nf itself): the exit of event `e` through it, refracted out from inside (none
+    /// under total internal reflection), reflected from outside, and whether it leaves the
+    /// boundary. Lane by lane without branches, so the loop vectorises (same IEEE operations
+    /// with or without AVX2, no fused multiply-add: the same bits on every x86-64 machine).
+    #[inline(always)]
+    fn exits(&mut self, s: &Surface, e: &Event, (t, b): ([f64; 3], [f64; 3])) {
+        let (d, nf, eta) = (e.d, e.nf, s.eta);
+        for l in 0..RING_LANES {
+            let (sx, sy) = (self.sx[l], self.sy[l]);
+            let m = normalize([
+                nf[0] + sx * t[0] + sy * b[0],
+                nf[1] + sx * t[1] + sy * b[1],
+                nf[2] + sx * t[2] + sy * b[2],
+            ]);
+            let m = if l == 0 { nf } else { m };
+            let cos_i = -dot(d, m);
+            // Snell from inside (fresnel::dielectric's sin²θt, the fiber's η into air).
+            let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
+            let cos_t = (1.0 - sin_t2).max(0.0).sqrt();
+            let w = if e.inside {
+                // surface::refract: Snell in vector form, renormalised.
+                normalize([
+                    eta * d[0] + (eta * cos_i - cos_t) * m[0],
+                    eta * d[1] + (eta * cos_i - cos_t) * m[1],
+                    eta * d[2] + (eta * cos_i - cos_t) * m[2],
+                ])
+            } else {
+                reflect(d, m, cos_i)
+            };
+            let side = dot(w, nf);
+            let leaves = if e.inside {
+                sin_t2 < 1.0 && side < 0.0
+            } else {
+                side > 0.0
+            };
+            self.ok[l] = cos_i > 0.0 && leaves;
+            (self.w[0][l], self.w[1][l], self.w[2][l]) = (w[0], w[1], w[2]);
+        }
+    }
 }
 
 #[cfg(test)]

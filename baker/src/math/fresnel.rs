@@ -9,12 +9,12 @@
 //! give results one ulp or so apart. Every table, export and Monte Carlo result is pinned bit
 //! for bit, so each caller keeps its formula; neither is rewritten in terms of the other.
 
-/// [`dielectric`]'s reflectance with the same floating-point operations but no branch, so a
-/// loop over many cosines vectorises (the exit-lobe densities of `fiber::surface::FacetPdf`):
+/// [`dielectric`]'s reflectance in single precision and with no branch, so a loop over many
+/// cosines vectorises eight lanes wide (the exit-lobe densities of `fiber::surface::FacetPdf`):
 /// under total internal reflection cos θt is 0 and the amplitude ratios are ±1, R = 1 exactly.
 /// Needs `ni` ≠ `nt` and `cos_i` > 0 (otherwise a meaningless value, which callers mask out).
 #[inline(always)]
-pub fn reflectance_branch_free(ni: f64, nt: f64, cos_i: f64) -> f64 {
+pub fn reflectance_branch_free(ni: f32, nt: f32, cos_i: f32) -> f32 {
     let eta = ni / nt;
     let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
     let cos_t = (1.0 - sin_t2).max(0.0).sqrt();
