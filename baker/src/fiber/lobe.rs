@@ -34,7 +34,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use smallvec::SmallVec;
 
-use super::surface::{basis, dot, normalize, reflect, FacetPdf};
+use super::surface::{basis, dot, normalize, reflect, refract, FacetPdf};
 use super::Surface;
 use formats::AngularGrid;
 
@@ -137,13 +137,12 @@ impl LobeGrid {
         ring.exits(s, e, (t, b));
         let exit = |l: usize| [ring.w[0][l], ring.w[1][l], ring.w[2][l]];
         let mut sum = [0.0; 3];
-        let mut any = false;
         for l in (0..RING_LANES).filter(|&l| ring.ok[l]) {
             let w = exit(l);
             sum = [sum[0] + w[0], sum[1] + w[1], sum[2] + w[2]];
-            any = true;
         }
-        if !any || dot(sum, sum) < 1e-12 {
+        // No exit at all leaves the sum 0.
+        if dot(sum, sum) < 1e-12 {
             return None;
         }
         let axis = normalize(sum);
@@ -371,9 +370,9 @@ impl Default for Ring {
 }
 
 impl Ring {
-    /// For every facet m ∝ nf + sx·t + sy·b (lane 0: the mean normal nf itself): the exit of event `e` through it, refracted out from inside (none
-    /// under total internal reflection), reflected from outside, and whether it leaves the
-    /// boundary. Lane by lane without branches, so the loop vectorises (same IEEE operations
+    /// For every facet m ∝ nf + sx·t + sy·b (lane 0: the mean normal nf itself): the exit of
+    /// event `e` through it, refracted out from inside (none under total internal reflection),
+    /// reflected from outside, and whether it leaves the boundary. Lane by lane without branches, so the loop vectorises (same IEEE operations
     /// with or without AVX2, no fused multiply-add: the same bits on every x86-64 machine).
     #[inline(always)]
     fn exits(&mut self, s: &Surface, e: &Event, (t, b): ([f64; 3], [f64; 3])) {
@@ -391,12 +390,7 @@ impl Ring {
             let sin_t2 = eta * eta * (1.0 - cos_i * cos_i);
             let cos_t = (1.0 - sin_t2).max(0.0).sqrt();
             let w = if e.inside {
-                // surface::refract: Snell in vector form, renormalised.
-                normalize([
-                    eta * d[0] + (eta * cos_i - cos_t) * m[0],
-                    eta * d[1] + (eta * cos_i - cos_t) * m[1],
-                    eta * d[2] + (eta * cos_i - cos_t) * m[2],
-                ])
+                refract(d, m, eta, cos_i, cos_t)
             } else {
                 reflect(d, m, cos_i)
             };
