@@ -18,7 +18,7 @@
 //! [^heitz14b]: E. Heitz, E. d'Eon, "Importance sampling microfacet-based BSDFs using the
 //!     distribution of visible normals", EGSR 2014, §5 (V-cavity sampling).
 
-use crate::math::exp::exp_neg;
+use crate::math::exp::exp_neg_f32;
 use crate::math::fresnel;
 
 /// Largest number of facet events inside one V-cavity before falling back to the mean
@@ -170,7 +170,7 @@ impl Surface {
 
 /// [`Surface::first_facet_pdf`] of one boundary event, for many outgoing directions: the
 /// event's constants once, then a density per direction without branches (each condition a
-/// select, the exponential [`exp_neg`]), so [`FacetPdf::eval_many`] vectorises.
+/// select, the exponential [`exp_neg_f32`]), so [`FacetPdf::eval_many`] vectorises.
 ///
 /// In single precision: the densities are Monte Carlo integrands of the exit lobes
 /// ([`crate::fiber::lobe`]), whose noise (percents) is orders above what f32 changes (within
@@ -281,8 +281,10 @@ impl FacetPdf {
         let c2 = cos_m * cos_m;
         let inv_c2 = 1.0 / c2;
         // D(m) = exp(−tan²θm/α²)/(π α² cos⁴θm), tan²θm = (1 − cos²θm)/cos²θm.
-        let d_m =
-            exp_neg(-(1.0 - c2) * inv_c2 * self.inv_alpha2) * self.inv_pi_alpha2 * inv_c2 * inv_c2;
+        let d_m = exp_neg_f32(-(1.0 - c2) * inv_c2 * self.inv_alpha2)
+            * self.inv_pi_alpha2
+            * inv_c2
+            * inv_c2;
         let p_vis = 2.0 * d_m * cos_m * a / (a + a2);
         let ok = h2 > 0.0 && cos_m > 0.0 && a > 0.0;
         (if ok { p_vis } else { 0.0 }, a, wom, cos_m, inv)

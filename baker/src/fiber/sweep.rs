@@ -18,6 +18,12 @@
 //!   sweep's exits) are thus looked up, not evaluated term by term;
 //! - paths beyond both (a few hundred diameters; the table is bounded) are evaluated exactly.
 //!
+//! The table (up to 16,384 rows) is built once per bake, its rows in parallel; a variant's R,
+//! G and B share its μa(λ), so each row evaluates each variant's exponentials once, in a
+//! loop that vectorises ([`exp_neg_f64`]). A 20-variant RGB sweep's table took 33 ms of a
+//! polyester bake's 0.44 s before (one libm `exp` per term and channel, on one thread), about
+//! 12 ms of CPU over two threads now (validation/bench-runs/2026-12-06-fiber-sweep-costs).
+//!
 //! Cost: each exiting photon still adds one row of all channels, so a wide sweep costs more
 //! than a single variant (measured: 20 variants × RGB of silk at 6°, 16,384 photons per
 //! direction, 1.5× the CPU time of one variant; the rest of the difference is writing 20
@@ -26,7 +32,9 @@
 //! adds per photon whatever the sweep) and multiply it by the channel table at the end —
 //! exactly the same interpolated result, at a cost independent of the number of variants.
 
+use crate::math::exp::exp_neg_f64;
 use crate::spectral::ColourMap;
+use rayon::prelude::*;
 
 /// One dyeing of the fiber: a name and μa per wavelength of the sweep, per µm.
 #[derive(Debug, Clone, PartialEq)]
@@ -149,11 +157,18 @@ impl Channels {
         } else {
             (typical_path_um.max(1.0), 2, Vec::new())
         };
-        let uniform = (0..len).map(|i| i as f64 * step_um);
-        let table = uniform
+        let points: Vec<f64> = (0..len)
+            .map(|i| i as f64 * step_um)
             .chain(tail.iter().copied())
-            .flat_map(|l| terms.iter().map(move |t| exact(t, l)))
             .collect();
+        let mut table = vec![0.0; points.len() * n];
+        if n > 0 {
+            let groups = Group::of(&terms);
+            table
+                .par_chunks_mut(n)
+                .zip(&points)
+                .for_each(|(row, &l)| fill_row(&groups, l, row));
+        }
         Self {
             variants: variants.iter().map(|v| v.name.clone()).collect(),
             channel_names: names[..n / variants.len().max(1)].to_vec(),
@@ -236,24 +251,91 @@ impl Channels {
     }
 }
 
-/// Σ c·exp(−μa·ℓ) over a channel's terms. A term with μa·ℓ > [`NEGLIGIBLE_MU_L`] is below
-/// 2⁻⁷² of its coefficient, far under any stored precision (f32 keeps 24 bits of the channel's
-/// value), and is skipped without calling exp: the paths beyond the table (long internal
-/// trapping in a deep sweep) would otherwise evaluate every term.
-fn exact(terms: &[(f64, f64)], l: f64) -> f64 {
-    terms
-        .iter()
-        .map(|&(m, c)| {
-            let x = m * l;
-            if x == 0.0 {
-                c
-            } else if x > NEGLIGIBLE_MU_L {
-                0.0
-            } else {
-                c * (-x).exp()
+/// Consecutive channels whose terms share one list of μa (a variant's R, G and B): each row
+/// evaluates those attenuations once for the whole group.
+struct Group {
+    /// The group's first channel.
+    first: usize,
+    /// μa per term, per µm.
+    mua_per_um: Vec<f64>,
+    /// Per channel of the group: its coefficient per term.
+    coef: Vec<Vec<f64>>,
+}
+
+impl Group {
+    fn of(terms: &[Vec<(f64, f64)>]) -> Vec<Group> {
+        let mut groups: Vec<Group> = Vec::new();
+        for (c, t) in terms.iter().enumerate() {
+            let coef = t.iter().map(|x| x.1).collect();
+            match groups.last_mut() {
+                Some(g)
+                    if g.mua_per_um.len() == t.len()
+                        && g.mua_per_um
+                            .iter()
+                            .zip(t)
+                            .all(|(m, x)| m.to_bits() == x.0.to_bits()) =>
+                {
+                    g.coef.push(coef)
+                }
+                _ => groups.push(Group {
+                    first: c,
+                    mua_per_um: t.iter().map(|x| x.0).collect(),
+                    coef: vec![coef],
+                }),
             }
-        })
-        .sum()
+        }
+        groups
+    }
+}
+
+/// One row of the table: every channel at path `l` µm, each the same sum of the same products
+/// [`exact`] forms (so the same bits), with each group's attenuations evaluated once, in a
+/// loop that vectorises (4 lanes under AVX2, 2 otherwise; the same IEEE operations, no fused
+/// multiply-add, so the same bits on every x86-64).
+fn fill_row(groups: &[Group], l: f64, row: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2 (checked above).
+        return unsafe { fill_row_avx2(groups, l, row) };
+    }
+    fill_row_in(groups, l, row)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn fill_row_avx2(groups: &[Group], l: f64, row: &mut [f64]) {
+    fill_row_in(groups, l, row)
+}
+
+#[inline(always)]
+fn fill_row_in(groups: &[Group], l: f64, row: &mut [f64]) {
+    let mut e = Vec::new();
+    for g in groups {
+        e.clear();
+        e.extend(g.mua_per_um.iter().map(|&m| attenuation(m * l)));
+        for (k, coef) in g.coef.iter().enumerate() {
+            row[g.first + k] = coef.iter().zip(&e).map(|(c, e)| c * e).sum();
+        }
+    }
+}
+
+/// exp(−x) for x = μa·ℓ ≥ 0, branch-free ([`exp_neg_f64`], within 4 ulp of the correctly
+/// rounded value, exactly 1 at 0); 0 beyond [`NEGLIGIBLE_MU_L`], where it is below 2⁻⁷², far
+/// under any stored precision (f32 keeps 24 bits of a channel's value).
+#[inline(always)]
+fn attenuation(x: f64) -> f64 {
+    let e = exp_neg_f64(-x);
+    if x > NEGLIGIBLE_MU_L {
+        0.0
+    } else {
+        e
+    }
+}
+
+/// Σ c·exp(−μa·ℓ) over a channel's terms ([`attenuation`]); the paths beyond the table (long
+/// internal trapping in a deep sweep) are evaluated with it.
+fn exact(terms: &[(f64, f64)], l: f64) -> f64 {
+    terms.iter().map(|&(m, c)| c * attenuation(m * l)).sum()
 }
 
 #[cfg(test)]
@@ -289,6 +371,17 @@ mod tests {
                         "{kind:?} ℓ {l} channel {c}: {} vs {want}",
                         got[c]
                     );
+                }
+            }
+            // The table holds exactly `exact`'s value at every grid point (the rows share each
+            // group's exponentials but form the same products and sums).
+            let n = ch.len();
+            let points = (0..ch.len)
+                .map(|i| i as f64 * ch.step_um)
+                .chain(ch.tail.clone());
+            for (i, l) in points.enumerate() {
+                for (c, t) in ch.terms.iter().enumerate() {
+                    assert_eq!(ch.table[i * n + c].to_bits(), exact(t, l).to_bits());
                 }
             }
             // White: every channel is 1 at any path.
