@@ -552,7 +552,7 @@ impl SliceSums {
             n_phi: grid.n_phi,
             nch,
             per_variant,
-            sum: vec![0.0; bins * nch],
+            sum: scratch::zeroed(bins * nch),
             noise_s: vec![0.0; bins],
             noise_s2: vec![0.0; bins],
             dphi_s: vec![0.0; grid.n_phi],
@@ -623,7 +623,7 @@ impl SliceSums {
     }
 
     /// Fractions, albedos and their errors, and the noise of the slice.
-    fn into_result(self, grid: &AngularGrid, launched: u64, start: Instant) -> SliceResult {
+    fn into_result(mut self, grid: &AngularGrid, launched: u64, start: Instant) -> SliceResult {
         let (bins, nch) = (self.bins, self.nch);
         let nbf = self.used as f64;
         let hn = if self.gtot > 0.0 { self.gtot } else { 1.0 };
@@ -647,13 +647,15 @@ impl SliceSums {
         let dphi_se = (0..self.n_phi)
             .map(|j| batch_se(self.dphi_s[j], self.dphi_s2[j], nbf))
             .collect();
+        let noise = self.noise(grid, nbf);
+        scratch::recycle(std::mem::take(&mut self.sum));
         SliceResult {
             fraction,
             albedo,
             albedo_se,
             density_se,
             dphi_se,
-            noise: self.noise(grid, nbf),
+            noise,
             launched,
             intercepted: self.hits,
             lost_weight: self.lost,
@@ -760,11 +762,11 @@ fn batch_se(s: f64, s2: f64, nbf: f64) -> f64 {
     (batch_var(s, s2, nbf) / (nbf - 1.0)).sqrt()
 }
 
-/// Batch tallies are reused: a batch's `[bin][channel]` array is as large as a sweep's
-/// table (1,800 bins × 60 channels at 6°, 864 kB), and a fresh allocation per batch costs
-/// two page faults per page (read-then-write of zero pages) and a TLB shootdown each, more
-/// than zeroing a used array. Recycled arrays come back zeroed, so results do not depend on
-/// which one a batch gets.
+/// Batch tallies and slice sums are reused: a batch's `[bin][channel]` array is as large as a
+/// sweep's table (1,800 bins × 60 channels at 6°, 864 kB), and a fresh allocation per batch
+/// costs two page faults per page (read-then-write of zero pages) and a TLB shootdown each,
+/// more than zeroing a used array. Recycled arrays come back zeroed, so results do not depend
+/// on which one a batch gets.
 mod scratch {
     use std::sync::Mutex;
 
@@ -789,7 +791,13 @@ mod scratch {
                 return v;
             }
         }
-        vec![0.0; len]
+        // Written, not `vec![0.0; len]`: calloc's untouched pages are the shared zero page
+        // until written, so a batch's first `+=` into each page (and, after recycling, the
+        // zeroing of a page the batch only read) took a copy-on-write fault with a TLB
+        // shootdown to the other threads. Written zeros give each page its own frame at once.
+        let mut v = Vec::with_capacity(len);
+        v.resize(len, 0.0);
+        v
     }
 
     /// Keeps `v` for a later [`zeroed`] (or frees it when enough are kept).

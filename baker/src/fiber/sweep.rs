@@ -20,9 +20,11 @@
 //!
 //! The table (up to 16,384 rows) is built once per bake, its rows in parallel; a variant's R,
 //! G and B share its μa(λ), so each row evaluates each variant's exponentials once, in a
-//! loop that vectorises ([`exp_neg_f64`]). A 20-variant RGB sweep's table took 33 ms of a
-//! polyester bake's 0.44 s before (one libm `exp` per term and channel, on one thread), about
-//! 12 ms of CPU over two threads now (validation/bench-runs/2026-12-06-fiber-sweep-costs).
+//! loop that vectorises ([`exp_neg_f64`]), and sums up to four channels side by side. A
+//! 20-variant RGB polyester sweep's table (12,437 rows × 60 channels) took 33 ms of wall time
+//! with one libm `exp` per term and channel on one thread, 44–49 ms of CPU (23–30 ms wall on
+//! two threads) with the shared exponentials, and 25 ms of CPU (13 ms wall) now
+//! (validation/bench-runs/2026-12-06-fiber-sweep-table).
 //!
 //! Cost: each exiting photon still adds one row of all channels, so a wide sweep costs more
 //! than a single variant (measured: 20 variants × RGB of silk at 6°, 16,384 photons per
@@ -311,10 +313,27 @@ fn fill_row_avx2(groups: &[Group], l: f64, row: &mut [f64]) {
 fn fill_row_in(groups: &[Group], l: f64, row: &mut [f64]) {
     let mut e = Vec::new();
     for g in groups {
-        e.clear();
-        e.extend(g.mua_per_um.iter().map(|&m| attenuation(m * l)));
-        for (k, coef) in g.coef.iter().enumerate() {
-            row[g.first + k] = coef.iter().zip(&e).map(|(c, e)| c * e).sum();
+        // A plain loop over slices, not `extend` (whose fold was compiled apart, outside
+        // the AVX2 function, and ran in 2 lanes).
+        e.resize(g.mua_per_um.len(), 0.0);
+        for (e, &m) in e.iter_mut().zip(&g.mua_per_um) {
+            *e = attenuation(m * l);
+        }
+        // Up to four channels at once: each channel's sum runs in the same order from −0.0
+        // as `exact`'s `sum()` (the same bits), and the four independent chains overlap
+        // instead of waiting on one add after another.
+        let mut out = row[g.first..g.first + g.coef.len()].chunks_mut(4);
+        for (coef, out) in g.coef.chunks(4).zip(&mut out) {
+            // A short chunk repeats its first channel in the unused lanes (not stored).
+            let c: [&[f64]; 4] = std::array::from_fn(|j| &coef[j.min(coef.len() - 1)][..e.len()]);
+            let mut acc = [-0.0_f64; 4];
+            for (t, &e) in e.iter().enumerate() {
+                acc[0] += c[0][t] * e;
+                acc[1] += c[1][t] * e;
+                acc[2] += c[2][t] * e;
+                acc[3] += c[3][t] * e;
+            }
+            out.copy_from_slice(&acc[..out.len()]);
         }
     }
 }

@@ -7,8 +7,10 @@
 //! - [`exp_neg_f32`]: degree 7 (truncation r⁸/8! < 6·10⁻⁹ relative, below half an f32 ulp);
 //!   within 2 ulp of e^x rounded to f32; 0 below −87 (e^x < 1.7·10⁻³⁸, the smallest normal
 //!   f32's size);
-//! - [`exp_neg_f64`]: degree 13 (truncation r¹⁴/14! < 5·10⁻¹⁸ relative); within 4 ulp of the
-//!   correctly rounded value; 0 below −708 (e^x < 4·10⁻³⁰⁸).
+//! - [`exp_neg_f64`]: degree 13 (truncation r¹⁴/14! < 5·10⁻¹⁸ relative), evaluated by
+//!   Estrin's scheme (a dependency chain of 8 operations, not Horner's 22: the sweep table's
+//!   rows are bound by latency); tested within 4 ulp of `f64::exp` (measured: 1 ulp over the
+//!   test's 300,000 arguments); 0 below −708 (e^x < 4·10⁻³⁰⁸).
 
 /// The f32 constants: ln 2 in two parts (fdlibm's `expf` ln2_hi, ln2_lo, by their bits; the
 /// high part has nine trailing zero bits, so k·LN2_HI is exact for |k| < 2⁹), 1.5·2²³ (adding
@@ -82,10 +84,22 @@ pub fn exp_neg_f64(x: f64) -> f64 {
     let kf = t - ROUND_F64;
     let k = (t.to_bits() as i64).wrapping_sub(ROUND_F64.to_bits() as i64);
     let r = (xc - kf * LN2_HI_F64) - kf * LN2_LO_F64;
-    let mut p = INV_FACT_F64[11];
-    for &c in INV_FACT_F64[..11].iter().rev() {
-        p = p * r + c;
-    }
+    // Estrin's scheme (pairs, then powers r², r⁴, r⁸): a dependency chain of 8 operations
+    // instead of Horner's 22, so a row of the sweep table is not bound by add latency.
+    let c = &INV_FACT_F64;
+    let r2 = r * r;
+    let r4 = r2 * r2;
+    let r8 = r4 * r4;
+    let q0 = c[0] + c[1] * r;
+    let q1 = c[2] + c[3] * r;
+    let q2 = c[4] + c[5] * r;
+    let q3 = c[6] + c[7] * r;
+    let q4 = c[8] + c[9] * r;
+    let q5 = c[10] + c[11] * r;
+    let s0 = q0 + q1 * r2;
+    let s1 = q2 + q3 * r2;
+    let s2 = q4 + q5 * r2;
+    let p = (s0 + s1 * r4) + s2 * r8;
     let er = 1.0 + r * (1.0 + r * p);
     let scale = f64::from_bits(((k + 1023) as u64) << 52);
     if x < FLOOR_F64 {

@@ -3,7 +3,8 @@
 # Build: git worktree add /tmp/landed b1b1456 && (cd /tmp/landed && CARGO_TARGET_DIR=/tmp/landed-target cargo build --release -p baker)
 #        cargo build --release -p baker; copy both binaries to /tmp/meas6/baker-{old,new}.
 cd "$(dirname "$0")/../../.."
-O=/tmp/meas6/baker-old; N=/tmp/meas6/baker-new
+# O, N and POLY_ROUNDS may be set (the later record ../2026-12-06-fiber-sweep-table does).
+O=${O:-/tmp/meas6/baker-old}; N=${N:-/tmp/meas6/baker-new}
 S=validation/bench-runs/2026-12-05-fiber-sweep-h5; E=validation/bench-runs/2026-12-03-fiber-estimators
 sweep() { # fiber, spec of one variant, spec of 20, rounds
   echo "== $1 sweep (6 deg, 16384 photons/direction): one variant and 20, old and new alternating"
@@ -13,7 +14,7 @@ sweep() { # fiber, spec of one variant, spec of 20, rounds
   done; done
   ls -l /tmp/meas6/$1-*/*/$1/ | grep -E "bcsdf|h5|meas6"
 }
-sweep polyester $S/polyester-one.yaml $S/polyester-sweep20.yaml 3
+sweep polyester $S/polyester-one.yaml $S/polyester-sweep20.yaml ${POLY_ROUNDS:-3}
 sweep silk $E/silk-one.yaml $E/silk-sweep20.yaml 2
 sweep cotton $S/cotton-one.yaml $S/cotton-sweep20.yaml 2
 echo "== polyester at the thesis's noise, split 8 (full bake), old and new"
