@@ -9,6 +9,7 @@
 pub mod dye;
 pub mod lobe;
 pub mod material;
+mod scratch;
 pub mod section;
 pub mod slices;
 pub mod surface;

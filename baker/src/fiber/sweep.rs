@@ -169,7 +169,7 @@ impl Channels {
             table
                 .par_chunks_mut(n)
                 .zip(&points)
-                .for_each(|(row, &l)| fill_row(&groups, l, row));
+                .for_each_init(Vec::new, |e, (row, &l)| fill_row(&groups, l, row, e));
         }
         Self {
             variants: variants.iter().map(|v| v.name.clone()).collect(),
@@ -294,24 +294,24 @@ impl Group {
 /// [`exact`] forms (so the same bits), with each group's attenuations evaluated once, in a
 /// loop that vectorises (4 lanes under AVX2, 2 otherwise; the same IEEE operations, no fused
 /// multiply-add, so the same bits on every x86-64).
-fn fill_row(groups: &[Group], l: f64, row: &mut [f64]) {
+/// `e` holds a group's attenuations (reused from row to row).
+fn fill_row(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the processor has AVX2 (checked above).
-        return unsafe { fill_row_avx2(groups, l, row) };
+        return unsafe { fill_row_avx2(groups, l, row, e) };
     }
-    fill_row_in(groups, l, row)
+    fill_row_in(groups, l, row, e)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-fn fill_row_avx2(groups: &[Group], l: f64, row: &mut [f64]) {
-    fill_row_in(groups, l, row)
+fn fill_row_avx2(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
+    fill_row_in(groups, l, row, e)
 }
 
 #[inline(always)]
-fn fill_row_in(groups: &[Group], l: f64, row: &mut [f64]) {
-    let mut e = Vec::new();
+fn fill_row_in(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
     for g in groups {
         // A plain loop over slices, not `extend` (whose fold was compiled apart, outside
         // the AVX2 function, and ran in 2 lanes).
