@@ -238,9 +238,12 @@ fn cli_trace_json_and_png() {
         .iter()
         .map(|x| x.as_f64().unwrap())
         .sum();
+    // The histogram holds the fractions rounded to f32 (`SliceResult::fraction`), the albedo
+    // their full-precision sum: with the entry's split draws the weights are not the short
+    // binary fractions of plain tracing, so the two differ by f32 roundings (~10⁻⁹ each).
     assert!(
-        (sum - a).abs() < 1e-9 && a < 1.0 && a > 0.5,
-        "dyed silk albedo {a}"
+        (sum - a).abs() < 1e-6 && a < 1.0 && a > 0.5,
+        "dyed silk albedo {a}, histogram sum {sum}"
     );
     // The entry's own bins (specs/fibers.yaml bakes at 6°).
     assert_eq!(v["bake"]["resolution_deg"], 6.0);

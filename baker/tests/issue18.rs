@@ -456,3 +456,102 @@ fn issue18_table_albedo_errors_match_two_seeds() {
         "variance ratio {r} over {k} values"
     );
 }
+
+/// A fiber's own `estimators:` (the best estimator differs between fiber types): the entry
+/// bakes exactly what a spec whose `bake:` names those estimators bakes (same values), its
+/// manifest entry and `fiber trace` report them, a fiber without the block keeps the spec's,
+/// and a wrong field is an error naming the file, line, field and range.
+#[test]
+fn issue18_a_fiber_can_choose_its_own_estimators() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fibers = |own: &str| {
+        format!(
+            "fibers:
+  - {{name: silk, type: silk, section: {{shape: silk}}, dye: reactive_blue_19, depth_of_shade_percent: 1{own}}}
+  - {{name: wool, type: wool, section: {{shape: wool}}, diameter_um: 20}}
+"
+        )
+    };
+    let bake = "version: 1\nbake: {resolution_deg: 15, photons_per_direction: 8192, seed: 5";
+    let own = format!(
+        "{bake}}}\n{}",
+        fibers(", estimators: {split: 2, exit_draws: 4, expected_exits: all}")
+    );
+    let global = format!(
+        "{bake}, split: 2, exit_draws: 4, expected_exits: all}}\n{}",
+        fibers("")
+    );
+    let plain = format!("{bake}}}\n{}", fibers(""));
+    let a = common::bake_spec(tmp.path(), "own", &own, 2);
+    let b = common::bake_spec(tmp.path(), "global", &global, 2);
+    let c = common::bake_spec(tmp.path(), "plain", &plain, 2);
+    let values = |out: &Path, entry: &str| -> Vec<f32> {
+        let t = Bcsdf::open(out.join(format!("{entry}/section-00.bcsdf"))).unwrap();
+        (0..t.dir.n_wi())
+            .flat_map(|i| t.decode(i).unwrap().values)
+            .collect()
+    };
+    // The silk of `own` is the silk of `global`; its wool is the wool of `plain`.
+    assert!(
+        values(&a, "silk") == values(&b, "silk"),
+        "silk: not the bake: block's"
+    );
+    assert!(
+        values(&a, "wool") == values(&c, "wool"),
+        "wool: not the spec's"
+    );
+    assert!(values(&a, "silk") != values(&c, "silk"), "silk: the spec's");
+    let m = manifest(&a);
+    let (silk, wool) = (&m["entries"][0], &m["entries"][1]);
+    assert_eq!(
+        (&silk["split"], &silk["exit_draws"], &silk["expected_exits"]),
+        (&json!(2), &json!(4), &json!("all"))
+    );
+    assert_eq!(
+        (&wool["split"], &wool["exit_draws"], &wool["expected_exits"]),
+        (&json!(1), &json!(1), &json!("none"))
+    );
+    // `fiber trace` traces the entry with its own estimators.
+    let spec = tmp.path().join("own.yaml");
+    let o = common::baker_in(
+        tmp.path(),
+        &[
+            "fiber",
+            "trace",
+            spec.to_str().unwrap(),
+            "--entry",
+            "silk",
+            "--theta-i",
+            "-30",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let s = j.to_string();
+    assert!(
+        s.contains("\"expected_exits\":\"all\"") && s.contains("\"split\":2"),
+        "{s}"
+    );
+    // A wrong field: file, line, field and the allowed range or words.
+    let bad = tmp.path().join("bad.yaml");
+    std::fs::write(
+        &bad,
+        format!(
+            "{bake}}}\n{}",
+            fibers(", estimators: {split: 0, sampling: halton}")
+        ),
+    )
+    .unwrap();
+    let o = common::baker_in(tmp.path(), &["validate", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = common::stderr(&o);
+    for want in [
+        "bad.yaml:4:",
+        "fibers.estimators.split = 0",
+        "fibers.estimators.sampling",
+        "random, sobol",
+    ] {
+        assert!(e.contains(want), "missing {want:?} in:\n{e}");
+    }
+}

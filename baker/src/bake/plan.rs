@@ -32,6 +32,7 @@ pub fn plan_units(
             }
             let (mut index, mut out, mut cal) = (0, Vec::new(), None);
             for e in spec.fibers.iter().filter(|e| req.selects(&e.name)) {
+                let st = e.settings(&st);
                 let cost = if estimate {
                     let (c, s) = super::fiber::calibrate_entry(e, &st)?;
                     *cal.get_or_insert(0.0) += s;

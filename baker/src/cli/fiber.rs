@@ -209,7 +209,7 @@ fn bench_cases(a: &FiberBenchArgs) -> anyhow::Result<Vec<(String, Fiber, f64)>> 
 }
 
 /// The entries of `specs` named in `names` (every entry when empty), each with its spec's
-/// `bake:` settings; a name no spec has is a usage error that lists the entries.
+/// `bake:` settings and its own `estimators:`; a name no spec has is a usage error that lists the entries.
 fn spec_entries(
     specs: &[PathBuf],
     names: &[String],
@@ -222,7 +222,8 @@ fn spec_entries(
         for e in s.fibers {
             found.push(e.name.clone());
             if names.is_empty() || names.contains(&e.name) {
-                chosen.push((e, s.bake.clone(), s.storage));
+                let bake = e.settings(&s.bake);
+                chosen.push((e, bake, s.storage));
             }
         }
     }

@@ -97,6 +97,17 @@ pub enum Sampling {
     Sobol,
 }
 
+/// How a bake scores its photons: every estimator is unbiased, so these change the time and
+/// the noise of a table, not what it estimates (`bake:` in a fiber spec, or a fiber's own
+/// `estimators:`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Estimators {
+    pub split: u32,
+    pub exit_draws: u32,
+    pub expected_exits: ExpectedExits,
+    pub sampling: Sampling,
+}
+
 /// Settings of a bake (`bake:` in a fiber spec).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct BakeSettings {
@@ -159,6 +170,27 @@ impl BakeSettings {
     /// Photons traced per stored direction: [`BakeSettings::batches_for`] whole batches.
     pub fn photons_per_direction(&self) -> u64 {
         self.batches_for(self.photons) * self.batch
+    }
+
+    /// The settings that choose the estimators (what a fiber's `estimators:` may set).
+    pub fn estimators(&self) -> Estimators {
+        Estimators {
+            split: self.split,
+            exit_draws: self.exit_draws,
+            expected_exits: self.expected_exits,
+            sampling: self.sampling,
+        }
+    }
+
+    /// These settings with `e`'s estimators.
+    pub fn with_estimators(&self, e: Estimators) -> BakeSettings {
+        BakeSettings {
+            split: e.split,
+            exit_draws: e.exit_draws,
+            expected_exits: e.expected_exits,
+            sampling: e.sampling,
+            ..self.clone()
+        }
     }
 
     /// Draws per boundary event of a photon's main path.

@@ -63,7 +63,8 @@ pub fn bake(job: &Job, spec: &FiberSpec) -> anyhow::Result<()> {
     // Work units are numbered across the spec's entries (sharding uses the number).
     let mut unit_index = 0usize;
     for e in selected() {
-        if let Some((r, f)) = entry::bake_entry(job, spec, e, &settings, &mut unit_index)? {
+        let st = e.settings(&settings);
+        if let Some((r, f)) = entry::bake_entry(job, spec, e, &st, &mut unit_index)? {
             timing.push(serde_json::json!({"entry": r.name, "seconds": r.seconds,
                 "photons": r.photons.total, "photons_per_s": r.photons_per_s}));
             reports.push(r);

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use crate::fiber::dye::Dye;
 use crate::fiber::material::FiberType;
 use crate::fiber::section::generate::{generate, Shape};
+use crate::fiber::slices::{BakeSettings, Estimators};
 use crate::fiber::symmetry::Symmetry;
 use crate::fiber::{Cuticle, Fiber, Section, Surface};
 
@@ -58,9 +59,17 @@ pub struct FiberEntry {
     pub symmetries: Symmetry,
     /// Incoming directions the tables store after symmetry reduction.
     pub stored_directions: usize,
+    /// How this fiber's photons are scored: its `estimators:` over the spec's `bake:`.
+    pub estimators: Estimators,
 }
 
 impl FiberEntry {
+    /// The settings this fiber bakes with: `bake` (the spec's, with any command-line
+    /// overrides) with the fiber's own estimators.
+    pub fn settings(&self, bake: &BakeSettings) -> BakeSettings {
+        bake.with_estimators(self.estimators)
+    }
+
     pub fn fiber(&self) -> Fiber {
         self.fiber_with(self.section.clone())
     }

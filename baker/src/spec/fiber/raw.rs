@@ -167,6 +167,25 @@ pub struct RawFiber {
     pub sweep: Option<Spanned<RawSweep>>,
     /// `auto`: detect the section's symmetries; `none`: trace every incoming direction.
     pub symmetry: Option<Spanned<String>>,
+    /// This fiber's own estimators, each over the spec's `bake:` one (the best estimator
+    /// differs between fiber types; the tables' layout and photons stay the spec's).
+    pub estimators: Option<Spanned<RawEstimators>>,
+}
+
+/// `estimators:` of one fiber: the estimator fields of `bake:` (all optional; an absent one
+/// is the spec's).
+#[derive(Debug, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RawEstimators {
+    /// Draws per boundary event of the main path met from outside (a whole number; 1 = plain
+    /// tracing).
+    pub split: Option<Spanned<f64>>,
+    /// Draws per boundary event met from inside the fiber (a whole number; 1 = plain tracing).
+    pub exit_draws: Option<Spanned<f64>>,
+    /// Expected-value exit scoring: `none`, `inside` or `all` (as `bake.expected_exits`).
+    pub expected_exits: Option<Spanned<String>>,
+    /// Where the photons take their uniform numbers: `random` or `sobol` (as `bake.sampling`).
+    pub sampling: Option<Spanned<String>>,
 }
 
 /// Exactly one of `shape` (a generator, or `ellipse` with `ratio`), `polygon` (CSV) or `mask`

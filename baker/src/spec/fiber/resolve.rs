@@ -154,6 +154,10 @@ impl FiberCx {
             Some(sy) => self.choice("fibers.symmetry", sy, &SYMMETRY)?,
             None => SymmetryMode::Auto,
         };
+        let estimators = match &r.estimators {
+            Some(x) => self.estimators(&x.value, sc.bake),
+            None => sc.bake.estimators(),
+        };
         let mut e = FiberEntry {
             sections,
             variants,
@@ -171,6 +175,7 @@ impl FiberCx {
             population: vec![section],
             symmetries: Symmetry::NONE,
             stored_directions: 0,
+            estimators,
         };
         self.populate(r, &mut e)?;
         self.population_costs(loc(f), &mut e, sc.bake, sc.limits)?;

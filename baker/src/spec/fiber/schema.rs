@@ -33,6 +33,18 @@ pub(in crate::spec) fn refine(root: &mut Value) {
     bound(prop(c, "tilt_deg"), CUTICLE_TILT_DEG);
     dyes(root, &presets);
     bake(root);
+    estimators(def(root, "RawEstimators"));
+}
+
+/// The estimator fields, of `bake:` or of a fiber's `estimators:`.
+fn estimators(b: &mut Value) {
+    bound(prop(b, "split"), SPLIT);
+    bound(prop(b, "exit_draws"), super::settings::EXIT_DRAWS);
+    names(
+        prop(b, "expected_exits"),
+        &keys(&super::settings::EXPECTED_EXITS),
+    );
+    names(prop(b, "sampling"), &keys(&super::settings::SAMPLINGS));
 }
 
 /// Depth of shade, percent (§5.3.1's range of ζ).
@@ -180,8 +192,7 @@ fn bake(root: &mut Value) {
     bound(prop(b, "resolution_deg"), RESOLUTION_DEG);
     bound(prop(b, "photons_per_direction"), PHOTONS_PER_DIRECTION);
     bound(prop(b, "seed"), super::settings::SEED);
-    bound(prop(b, "split"), SPLIT);
-    bound(prop(b, "exit_draws"), super::settings::EXIT_DRAWS);
+    estimators(b);
     bound(
         prop(b, "max_photons_per_direction"),
         super::settings::MAX_PHOTONS_PER_DIRECTION,
@@ -195,11 +206,6 @@ fn bake(root: &mut Value) {
     bound(prop(b, "quantise_to_se"), super::settings::QUANTISE_TO_SE);
     names(prop(b, "precision"), &keys(&PRECISIONS));
     names(prop(b, "channels"), &keys(&CHANNELS));
-    names(
-        prop(b, "expected_exits"),
-        &keys(&super::settings::EXPECTED_EXITS),
-    );
-    names(prop(b, "sampling"), &keys(&super::settings::SAMPLINGS));
     let most = PRECISIONS.iter().map(|(_, p)| p.mantissa_bits()).max();
     bound(
         prop(b, "keep_bits"),

@@ -2,9 +2,9 @@
 //! photons, seed, split, precision and kept mantissa bits, channels, spectrum), each with the
 //! default of [`BakeSettings`] when absent or wrong.
 
-use super::raw::{RawBake, RawLambda};
+use super::raw::{RawBake, RawEstimators, RawLambda};
 use super::FiberCx;
-use crate::fiber::slices::{BakeSettings, ExpectedExits, NoiseTarget, Sampling};
+use crate::fiber::slices::{BakeSettings, Estimators, ExpectedExits, NoiseTarget, Sampling};
 use crate::fiber::sweep::ChannelKind;
 use crate::spec::check::{loc, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
@@ -64,6 +64,14 @@ pub(in crate::spec) const QUANTISE_TO_SE: Bounds = Bounds::closed(0.0, 1.0);
 pub(in crate::spec) const LAMBDA_NM: Bounds = Bounds::closed(360.0, 830.0);
 /// `bake.lambda_nm.step`, nm.
 pub(in crate::spec) const LAMBDA_STEP_NM: Bounds = Bounds::above(0.0, 100.0);
+
+/// The estimator fields as written, in `bake:` or a fiber's `estimators:`.
+struct EstimatorFields<'a> {
+    split: &'a Option<Spanned<f64>>,
+    exit_draws: &'a Option<Spanned<f64>>,
+    expected_exits: &'a Option<Spanned<String>>,
+    sampling: &'a Option<Spanned<String>>,
+}
 
 /// `bake.zstd_level` as a number.
 pub(in crate::spec) const ZSTD_LEVEL: Bounds = Bounds::whole(1.0, 22.0);
@@ -158,21 +166,13 @@ impl FiberCx {
             d.photons,
         );
         let seed = self.count("bake.seed", &b.seed, SEED.lo, SEED.hi, d.seed);
-        let split = self.count("bake.split", &b.split, SPLIT.lo, SPLIT.hi, d.split as u64) as u32;
-        let exit_draws = self.count(
-            "bake.exit_draws",
-            &b.exit_draws,
-            EXIT_DRAWS.lo,
-            EXIT_DRAWS.hi,
-            d.exit_draws as u64,
-        ) as u32;
-        let expected_exits = self.opt_choice(
-            "bake.expected_exits",
-            &b.expected_exits,
-            &EXPECTED_EXITS,
-            d.expected_exits,
-        );
-        let sampling = self.opt_choice("bake.sampling", &b.sampling, &SAMPLINGS, d.sampling);
+        let fields = EstimatorFields {
+            split: &b.split,
+            exit_draws: &b.exit_draws,
+            expected_exits: &b.expected_exits,
+            sampling: &b.sampling,
+        };
+        let estimators = self.estimator_fields("bake", fields, d.estimators());
         let target = b.target_rel_se.as_ref().and_then(|t| self.noise_target(t));
         let max_photons = self.count(
             "bake.max_photons_per_direction",
@@ -194,10 +194,6 @@ impl FiberCx {
             res_deg,
             photons: photons.max(1),
             seed,
-            split,
-            exit_draws,
-            expected_exits,
-            sampling,
             target,
             max_photons,
             precision,
@@ -205,6 +201,42 @@ impl FiberCx {
             channels,
             lambda_nm,
             ..d
+        }
+        .with_estimators(estimators)
+    }
+
+    /// A fiber's `estimators:`, each absent field the spec's (`bake`).
+    pub(super) fn estimators(&mut self, r: &RawEstimators, bake: &BakeSettings) -> Estimators {
+        let fields = EstimatorFields {
+            split: &r.split,
+            exit_draws: &r.exit_draws,
+            expected_exits: &r.expected_exits,
+            sampling: &r.sampling,
+        };
+        self.estimator_fields("fibers.estimators", fields, bake.estimators())
+    }
+
+    /// The estimator fields of `bake:` or of a fiber's `estimators:` (named `{at}.split`, …),
+    /// each absent or wrong one `d`'s.
+    fn estimator_fields(&mut self, at: &str, f: EstimatorFields, d: Estimators) -> Estimators {
+        let field = |name: &str| format!("{at}.{name}");
+        let (split, draws) = (d.split as u64, d.exit_draws as u64);
+        Estimators {
+            split: self.count(&field("split"), f.split, SPLIT.lo, SPLIT.hi, split) as u32,
+            exit_draws: self.count(
+                &field("exit_draws"),
+                f.exit_draws,
+                EXIT_DRAWS.lo,
+                EXIT_DRAWS.hi,
+                draws,
+            ) as u32,
+            expected_exits: self.opt_choice(
+                &field("expected_exits"),
+                f.expected_exits,
+                &EXPECTED_EXITS,
+                d.expected_exits,
+            ),
+            sampling: self.opt_choice(&field("sampling"), f.sampling, &SAMPLINGS, d.sampling),
         }
     }
 
