@@ -20,8 +20,11 @@ for kv in sys.argv[2:]:
     s = pat.sub(r"\g<1> " + v, s) if pat.search(s) else s.replace("  seed: 1\n", f"  seed: 1\n  {k}: {v}\n", 1)
 open(sys.argv[1], "w").write(s)
 PY
-  "$B" bake --threads 2 -q --photons "$ph" $entries -o "$T/$name" "$T/$name.yaml"
-  report "$name" "$T/$name/$name"
+  # Each group of entries in a folder of its own (a second group in the same folder would be
+  # a subset bake, written to subset/).
+  local o; o="$T/$name-$(echo "$entries" | md5sum | cut -c1-8)"
+  "$B" bake --threads 2 -q --photons "$ph" $entries -o "$o" "$T/$name.yaml"
+  report "$name" "$o/$name"
 }
 report() { # NAME DIR: per entry seconds, median relative SE, 1/(noise² × seconds)
   python3 - "$1" "$2" <<'PY'
