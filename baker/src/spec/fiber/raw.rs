@@ -39,7 +39,8 @@ pub struct RawBake {
     /// tracing).
     pub split: Option<Spanned<f64>>,
     /// Draws per boundary event met from inside the fiber, so every exit lobe is sampled this
-    /// many times per photon (a whole number; 1 = plain tracing).
+    /// many times per photon (a whole number; 1 = plain tracing). Never fewer than `split`:
+    /// a smaller value draws `split` times.
     pub exit_draws: Option<Spanned<f64>>,
     /// Expected-value exit scoring: `none`; `inside`, where a path leaves through a rough
     /// boundary from inside (TT, TRT, …) its exit lobe is scored over the outgoing bins in
@@ -180,7 +181,8 @@ pub struct RawEstimators {
     /// Draws per boundary event of the main path met from outside (a whole number; 1 = plain
     /// tracing).
     pub split: Option<Spanned<f64>>,
-    /// Draws per boundary event met from inside the fiber (a whole number; 1 = plain tracing).
+    /// Draws per boundary event met from inside the fiber (a whole number; 1 = plain
+    /// tracing; never fewer than `split`: a smaller value draws `split` times).
     pub exit_draws: Option<Spanned<f64>>,
     /// Expected-value exit scoring: `none`, `inside` or `all` (as `bake.expected_exits`).
     pub expected_exits: Option<Spanned<String>>,
