@@ -431,12 +431,16 @@ struct SliceJob<'a> {
     seed: u64,
 }
 
-/// The scores of one batch: weight per bin and channel, `[bin][channel]`, and its photons.
+/// The scores of one batch: weight per bin and channel, `[bin][channel]` (`f32`, see
+/// [`ChannelScore`]), and its photons.
 struct BatchScore {
-    local: Vec<f64>,
+    local: Vec<f32>,
+    /// Per channel: every weight the batch scored, summed in `f64` (its albedo before
+    /// normalisation; see [`ChannelScore`]).
+    total: Vec<f64>,
     /// When the batch tallies its first-reflection pass apart: that pass's part of `local`
     /// (same layout); empty otherwise.
-    reflection: Vec<f64>,
+    reflection: Vec<f32>,
     hits: u64,
     lost: f64,
     /// Σ g over the photons that met the fiber (their intercepted power).
@@ -485,15 +489,16 @@ impl SliceJob<'_> {
                 self.setup.first_reflection(&mut u, None, scale, to);
             }
             if let Some(own) = own {
-                sc.local
-                    .iter_mut()
-                    .zip(&own.local)
-                    .for_each(|(a, x)| *a += x);
-                reflection = own.local;
+                let (local, total) = own.finish();
+                sc.local.iter_mut().zip(&local).for_each(|(a, x)| *a += x);
+                sc.add_total(&total);
+                reflection = local;
             }
         }
+        let (local, total) = sc.finish();
         BatchScore {
-            local: sc.local,
+            local,
+            total,
             reflection,
             hits: h,
             lost: l,
@@ -504,9 +509,29 @@ impl SliceJob<'_> {
 
 /// One batch's scores: weight per bin and channel, each exit weighted by every channel's
 /// attenuation over its path ([`Channels::add_weighted`], evaluated once per path length).
+///
+/// The batch's tallies are `f32` (the slice's sums over batches, the albedos and the error
+/// estimates are `f64`): a sweep's exit adds a row of every variant's channels to each bin
+/// its lobe covers, and the `[bin][channel]` array, 864 kB in `f64` for 20 RGB variants at
+/// 6°, outgrew the 1 MiB second-level cache and made a 20-variant cotton sweep cost
+/// 1.30–1.37× one variant; in `f32` (432 kB) 1.20–1.23×
+/// (`validation/bench-runs/2026-12-06-fiber-f32-tallies`).
+/// A bin's batch sum of n positive terms errs by at most (n − 1)·2⁻²⁴ of it and by about
+/// √n·2⁻²⁴ in practice (6·10⁻⁵ for 10⁶ terms): far below the tables' per-bin noise (≥ 1 %
+/// at the thesis's noise) and the rounding `quantise_to_se` adds to them; measured against
+/// `f64` tallies at 2° and the thesis's settings, ≤ 1.1·10⁻⁶ per bin, ≤ 4.3·10⁻⁴ of its
+/// standard error. The albedos are summed apart in `f64`, once per exit (each exit's weights over the bins
+/// it covers, times its row), so a white furnace still gives exactly one and no undyed
+/// channel's albedo rounds above one.
 struct ChannelScore<'a> {
-    local: Vec<f64>,
+    local: Vec<f32>,
     row: Vec<f64>,
+    /// `row` in `f32`, as the tallies add it.
+    row32: Vec<f32>,
+    /// Per channel: Σ over the exits scored so far of (their weights) × (their row).
+    total: Vec<f64>,
+    /// Σ of the weights scored with the current `row` (not yet in `total`).
+    pending: f64,
     last: f64,
     channels: &'a Channels,
     grid: AngularGrid,
@@ -519,11 +544,36 @@ impl<'a> ChannelScore<'a> {
         ChannelScore {
             local: scratch::zeroed(grid.bins() * nch),
             row: vec![0.0; nch],
+            row32: vec![0.0; nch],
+            total: vec![0.0; nch],
+            pending: 0.0,
             last: f64::NAN,
             channels,
             grid: *grid,
             phi_i,
         }
+    }
+
+    /// Moves the weights scored with the current row into `total`.
+    fn settle(&mut self) {
+        if self.pending != 0.0 {
+            for (t, r) in self.total.iter_mut().zip(&self.row) {
+                *t += self.pending * r;
+            }
+            self.pending = 0.0;
+        }
+    }
+
+    /// Adds another tally's per-channel totals.
+    fn add_total(&mut self, total: &[f64]) {
+        self.settle();
+        self.total.iter_mut().zip(total).for_each(|(a, x)| *a += x);
+    }
+
+    /// The `[bin][channel]` tallies and the per-channel totals.
+    fn finish(mut self) -> (Vec<f32>, Vec<f64>) {
+        self.settle();
+        (self.local, self.total)
     }
 }
 
@@ -537,15 +587,48 @@ impl Exits for ChannelScore<'_> {
     #[inline]
     fn leave_bin(&mut self, bin: u32, path_um: f64, w: f64) {
         if path_um != self.last {
+            self.settle();
             self.row.iter_mut().for_each(|x| *x = 0.0);
             self.channels.add_weighted(path_um, 1.0, &mut self.row);
+            for (a, &x) in self.row32.iter_mut().zip(&self.row) {
+                *a = x as f32;
+            }
             self.last = path_um;
         }
+        self.pending += w;
         let nch = self.row.len();
         let b = bin as usize;
-        for (o, r) in self.local[b * nch..(b + 1) * nch].iter_mut().zip(&self.row) {
-            *o += w * r;
-        }
+        add_scaled(
+            &mut self.local[b * nch..(b + 1) * nch],
+            w as f32,
+            &self.row32,
+        );
+    }
+}
+
+/// `out += w·row`, element by element: a sweep's exit adds one such row (every variant's
+/// channels) per bin its lobe covers, the largest per-variant cost of a sweep. Under AVX2 in
+/// 8 lanes, otherwise 4; the same IEEE operations (no fused multiply-add), so the same bits.
+#[inline]
+fn add_scaled(out: &mut [f32], w: f32, row: &[f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2 (checked above).
+        return unsafe { add_scaled_avx2(out, w, row) };
+    }
+    add_scaled_in(out, w, row)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add_scaled_avx2(out: &mut [f32], w: f32, row: &[f32]) {
+    add_scaled_in(out, w, row)
+}
+
+#[inline(always)]
+fn add_scaled_in(out: &mut [f32], w: f32, row: &[f32]) {
+    for (o, r) in out.iter_mut().zip(row) {
+        *o += w * r;
     }
 }
 
@@ -566,6 +649,8 @@ struct SliceSums {
     dphi_s2: Vec<f64>,
     /// Per channel: Σ and Σ² over batches of the albedo.
     alb_s: Vec<f64>,
+    /// Per channel: Σ of the batches' totals (Λ before normalisation).
+    alb_total: Vec<f64>,
     alb_s2: Vec<f64>,
     /// Per bin: Σ and Σ² over the batches that tallied it apart of the first-reflection
     /// pass's part of `noise_s`.
@@ -591,6 +676,7 @@ impl SliceSums {
             dphi_s: vec![0.0; grid.n_phi],
             dphi_s2: vec![0.0; grid.n_phi],
             alb_s: vec![0.0; nch],
+            alb_total: vec![0.0; nch],
             alb_s2: vec![0.0; nch],
             refl_s: Vec::new(),
             refl_s2: Vec::new(),
@@ -613,11 +699,15 @@ impl SliceSums {
         // met the fiber), so Λ is exactly the fraction of that power which leaves.
         let hn = if g > 0.0 { g } else { 1.0 };
         // Bin b's sampling density of variant 0 in a batch's scores.
-        let density = |local: &[f64], b: usize| {
-            local[b * nch..b * nch + per_variant].iter().sum::<f64>() / (per_variant as f64 * hn)
+        let density = |local: &[f32], b: usize| {
+            local[b * nch..b * nch + per_variant]
+                .iter()
+                .map(|&x| f64::from(x))
+                .sum::<f64>()
+                / (per_variant as f64 * hn)
         };
-        for (a, x) in self.sum.iter_mut().zip(local) {
-            *a += x;
+        for (a, &x) in self.sum.iter_mut().zip(local) {
+            *a += f64::from(x);
         }
         // Batch means: the sampling density of variant 0 (per bin and per Δφ column) and
         // every channel's albedo.
@@ -641,15 +731,9 @@ impl SliceSums {
                 self.refl_s2[b] += x * x;
             }
         }
-        // One pass over the batch, each channel's sum in bin order.
-        let mut alb = vec![0.0; nch];
-        for row in local.chunks_exact(nch) {
-            for (a, x) in alb.iter_mut().zip(row) {
-                *a += x;
-            }
-        }
-        for (c, a) in alb.into_iter().enumerate() {
-            let a = a / hn;
+        for (c, &t) in part.total.iter().enumerate() {
+            self.alb_total[c] += t;
+            let a = t / hn;
             self.alb_s[c] += a;
             self.alb_s2[c] += a * a;
         }
@@ -661,16 +745,15 @@ impl SliceSums {
         let nbf = self.used as f64;
         let hn = if self.gtot > 0.0 { self.gtot } else { 1.0 };
         let mut fraction = vec![0.0; nch * bins];
-        let mut albedo = vec![0.0; nch];
         for b in 0..bins {
             for c in 0..nch {
                 let x = self.sum[b * nch + c] / hn;
                 fraction[c * bins + b] = f64::from(x as f32);
-                // Λ from the full-precision fractions (in bin order): a white furnace gives
-                // exactly one, not one less the fractions' f32 rounding.
-                albedo[c] += x;
             }
         }
+        // Λ from the batches' f64 totals: a white furnace gives exactly one, not one plus
+        // the tallies' or the fractions' f32 rounding.
+        let albedo = self.alb_total.iter().map(|t| t / hn).collect();
         let albedo_se = (0..nch)
             .map(|c| batch_se(self.alb_s[c], self.alb_s2[c], nbf))
             .collect();
@@ -808,9 +891,11 @@ mod tests {
         for k in 0..batches {
             let zp = if k % 2 == 0 { 1.0 } else { -1.0 };
             let zr = if (k / 2) % 2 == 0 { 1.0 } else { -1.0 };
+            let (sp, sr) = (sp as f32, sr as f32);
             let reflection = vec![1.0 + sr * zr; grid.bins()];
-            let local = reflection.iter().map(|r| r + 1.0 + sp * zp).collect();
+            let local: Vec<f32> = reflection.iter().map(|r| r + 1.0 + sp * zp).collect();
             sums.add(&BatchScore {
+                total: vec![local.iter().map(|&x| f64::from(x)).sum()],
                 local,
                 reflection,
                 hits: 1,
@@ -841,10 +926,11 @@ mod tests {
     /// The batches still needed follow the error's 1/√batches decline.
     #[test]
     fn batches_to_extrapolates_the_error() {
-        // Relative error per batch 0.2/2 = 0.1; over 8 batches 0.1/√7 (batch means).
-        let (g, s) = sums(0.2, 0.0, 8);
+        // Relative error per batch 0.25/2 = 0.125; over 8 batches 0.125/√7 (batch means;
+        // the batches' tallies are f32, so values f32 holds exactly).
+        let (g, s) = sums(0.25, 0.0, 8);
         let now = s.noise(&g, 8.0).median_rel_se;
-        assert!((now - 0.1 / 7f64.sqrt()).abs() < 1e-12, "{now}");
+        assert!((now - 0.125 / 7f64.sqrt()).abs() < 1e-12, "{now}");
         assert_eq!(s.batches_to(&g, NoiseTarget::RelSe(now)), None);
         // Half the error: four times the batches, 24 more.
         assert_eq!(s.batches_to(&g, NoiseTarget::RelSe(0.5 * now)), Some(24));

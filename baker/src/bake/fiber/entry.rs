@@ -558,7 +558,6 @@ fn with_average(eb: &EntryBake, b: usize, res: Vec<bake::SliceResult>) -> Vec<ba
     let (s, st) = (&eb.setup, eb.st);
     let mut all = res;
     if s.fibers.len() > 1 {
-        let bins = s.grid.bins();
         // φi of the bin's centre, summed as the tables were first baked (j·res + res/2, not
         // the grid's (j + ½)·res, which can differ in the last bit): the weights, and so the
         // average's bytes, stay those of every earlier bake.
@@ -594,7 +593,15 @@ fn with_average(eb: &EntryBake, b: usize, res: Vec<bake::SliceResult>) -> Vec<ba
         avg.density_se = combined(|r| &r.density_se, avg.density_se.len());
         avg.dphi_se = combined(|r| &r.dphi_se, avg.dphi_se.len());
         for c in 0..avg.albedo.len() {
-            avg.albedo[c] = avg.fraction[c * bins..(c + 1) * bins].iter().sum();
+            // The sections' albedos averaged as their fractions are (Σ_b of the average's
+            // fractions, which carry the batches' f32 tally rounding, can round an undyed
+            // white furnace's one above one).
+            avg.albedo[c] = all
+                .iter()
+                .zip(&w)
+                .map(|(r, w)| w * r.albedo[c])
+                .sum::<f64>()
+                / wt;
             avg.albedo_se[c] = all
                 .iter()
                 .zip(&w)
