@@ -520,7 +520,9 @@ impl SliceJob<'_> {
 /// √n·2⁻²⁴ in practice (6·10⁻⁵ for 10⁶ terms): far below the tables' per-bin noise (≥ 1 %
 /// at the thesis's noise) and the rounding `quantise_to_se` adds to them; measured against
 /// `f64` tallies at 2° and the thesis's settings, ≤ 1.1·10⁻⁶ per bin, ≤ 4.3·10⁻⁴ of its
-/// standard error. The albedos are summed apart in `f64`, once per exit (each exit's weights over the bins
+/// standard error.
+///
+/// The albedos are summed apart in `f64`, once per exit (each exit's weights over the bins
 /// it covers, times its row), so a white furnace still gives exactly one and no undyed
 /// channel's albedo rounds above one.
 struct ChannelScore<'a> {
@@ -649,9 +651,9 @@ struct SliceSums {
     dphi_s2: Vec<f64>,
     /// Per channel: Σ and Σ² over batches of the albedo.
     alb_s: Vec<f64>,
+    alb_s2: Vec<f64>,
     /// Per channel: Σ of the batches' totals (Λ before normalisation).
     alb_total: Vec<f64>,
-    alb_s2: Vec<f64>,
     /// Per bin: Σ and Σ² over the batches that tallied it apart of the first-reflection
     /// pass's part of `noise_s`.
     refl_s: Vec<f64>,
@@ -676,8 +678,8 @@ impl SliceSums {
             dphi_s: vec![0.0; grid.n_phi],
             dphi_s2: vec![0.0; grid.n_phi],
             alb_s: vec![0.0; nch],
-            alb_total: vec![0.0; nch],
             alb_s2: vec![0.0; nch],
+            alb_total: vec![0.0; nch],
             refl_s: Vec::new(),
             refl_s2: Vec::new(),
             hits: 0,
