@@ -383,11 +383,15 @@ fn decode_values(raw: &[u8], dtype: Precision, scales: &[f32], bins: usize) -> V
         .collect()
 }
 
-/// Builds a file from its directory (without `chunks`) and the raw shuffled slices.
+/// Builds a file from its directory (without `chunks`) and the raw shuffled slices, pushed
+/// in order or at their index ([`Writer::push_within_at`]).
 pub struct Writer {
     pub dir: Directory,
     payload: Vec<u8>,
     level: i32,
+    /// Slices pushed ahead of the next in order, by index: their chunk (offset unset), scales
+    /// and frame, appended when the slices before them arrive.
+    ahead: std::collections::BTreeMap<usize, (Chunk, Vec<f32>, Vec<u8>)>,
 }
 
 impl Writer {
@@ -399,6 +403,7 @@ impl Writer {
             dir,
             payload: Vec::new(),
             level: zstd_level,
+            ahead: Default::default(),
         }
     }
 
@@ -415,6 +420,26 @@ impl Writer {
         values: &[f64],
         rel_tol: Option<&[f64]>,
     ) -> Result<Vec<f32>, TableError> {
+        let next = self.dir.chunks.len() + self.ahead.len();
+        self.push_within_at(next, values, rel_tol)
+    }
+
+    /// [`Writer::push_within`] for stored ωi number `i`, in any order: a slice pushed ahead of
+    /// the next in order waits (compressed) until the ones before it arrive. Every index
+    /// below `n_wi` once; [`Writer::finish`] fails while one is missing.
+    pub fn push_within_at(
+        &mut self,
+        i: usize,
+        values: &[f64],
+        rel_tol: Option<&[f64]>,
+    ) -> Result<Vec<f32>, TableError> {
+        let done = self.dir.chunks.len();
+        if i < done || i >= self.dir.n_wi() || self.ahead.contains_key(&i) {
+            return Err(TableError::Invalid(format!(
+                "stored direction {i} pushed twice or beyond the {} stored",
+                self.dir.n_wi()
+            )));
+        }
         let n_vc = self.dir.variants.len() * self.dir.channels.len();
         if values.len() != n_vc * self.dir.bins() {
             return Err(TableError::Invalid(format!(
@@ -434,15 +459,32 @@ impl Writer {
             encode_slice(values, n_vc, self.dir.dtype, self.dir.keep_bits, rel_tol);
         let frame = zstd::bulk::compress(&raw, self.level)
             .map_err(|e| TableError::Compression(e.to_string()))?;
-        self.dir.chunks.push(Chunk {
-            offset: self.payload.len() as u64,
+        let chunk = Chunk {
+            offset: 0,
             compressed_bytes: frame.len() as u64,
             raw_bytes: raw.len() as u64,
             crc32: crc32(&raw),
-        });
-        self.dir.scale.extend(scales);
-        self.payload.extend_from_slice(&frame);
+        };
+        self.ahead.insert(i, (chunk, scales, frame));
+        while let Some((chunk, scales, frame)) = self.ahead.remove(&self.dir.chunks.len()) {
+            self.dir.chunks.push(Chunk {
+                offset: self.payload.len() as u64,
+                ..chunk
+            });
+            self.dir.scale.extend(scales);
+            self.payload.extend_from_slice(&frame);
+        }
         Ok(decoded)
+    }
+
+    /// Compressed bytes of the slices pushed so far (in order or ahead).
+    pub fn frame_bytes(&self) -> impl Iterator<Item = u64> + '_ {
+        let ahead = self.ahead.values().map(|(c, _, _)| c.compressed_bytes);
+        self.dir
+            .chunks
+            .iter()
+            .map(|c| c.compressed_bytes)
+            .chain(ahead)
     }
 
     /// The zstd level of the frames pushed from now on (each frame is independent) and of
@@ -458,6 +500,12 @@ impl Writer {
 
     /// The whole file.
     pub fn finish(self) -> Result<Vec<u8>, TableError> {
+        if let Some(i) = self.ahead.keys().next() {
+            return Err(TableError::Invalid(format!(
+                "stored direction {} was never pushed (direction {i} was)",
+                self.dir.chunks.len()
+            )));
+        }
         self.dir.check()?;
         let json = serde_json::to_vec(&self.dir).map_err(|e| TableError::Invalid(e.to_string()))?;
         let d = zstd::bulk::compress(&json, self.level)
@@ -904,6 +952,11 @@ mod tests {
 
     /// [`small`] with Σ f̂·ΔΩ = `total` in every slice and channel instead of 1.
     fn small_with_total(dtype: Precision, total: f64) -> (Vec<u8>, Vec<Vec<f64>>) {
+        small_in(dtype, total, false)
+    }
+
+    /// [`small_with_total`], its slices pushed last first when `reversed`.
+    fn small_in(dtype: Precision, total: f64, reversed: bool) -> (Vec<u8>, Vec<Vec<f64>>) {
         let res = 30.0;
         let (nt, np) = (6, 12);
         let wi_deg = vec![[-75.0, 15.0], [-15.0, 15.0]];
@@ -952,10 +1005,38 @@ mod tests {
                     v[k * nt * np + b] *= total / tot;
                 }
             }
-            w.push(&v).unwrap();
             slices.push(v);
         }
+        for s in 0..2 {
+            let i = if reversed { 1 - s } else { s };
+            w.push_within_at(i, &slices[i], None).unwrap();
+        }
         (w.finish().unwrap(), slices)
+    }
+
+    /// Slices pushed out of order make the same file as in order; a missing slice, one pushed
+    /// twice or one beyond the stored directions is an error.
+    #[test]
+    fn slices_may_arrive_in_any_order() {
+        for dtype in [Precision::F16, Precision::F32] {
+            assert_eq!(small_in(dtype, 1.0, true).0, small(dtype).0);
+        }
+        let (bytes, slices) = small(Precision::F16);
+        let t = Bcsdf::from_bytes(bytes).unwrap();
+        let dir = Directory {
+            chunks: vec![],
+            scale: vec![],
+            ..t.dir.clone()
+        };
+        let mut w = Writer::new(dir.clone(), 3);
+        w.push_within_at(1, &slices[1], None).unwrap();
+        assert!(w.push_within_at(1, &slices[1], None).is_err());
+        assert!(w.push_within_at(2, &slices[0], None).is_err());
+        assert_eq!(w.frame_bytes().count(), 1);
+        assert!(w.finish().is_err());
+        let mut w = Writer::new(dir, 3);
+        w.push_within_at(0, &slices[0], None).unwrap();
+        assert!(w.push_within_at(0, &slices[0], None).is_err());
     }
 
     /// Directions along every axis (and any length) are valid; zero, infinite and NaN

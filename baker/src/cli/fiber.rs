@@ -52,6 +52,10 @@ pub struct FiberBenchArgs {
     /// With --thesis: stored directions measured per entry (evenly spread).
     #[arg(long, default_value_t = 6, requires = "thesis")]
     pub directions: usize,
+    /// With --thesis: instead of --directions, every stored θ row of this many evenly spread
+    /// φ columns (the same directions whatever `share_theta`).
+    #[arg(long, requires = "thesis")]
+    pub columns: Option<usize>,
     /// With --thesis: trace each entry's first variant as the spec dyes it (the table a bake
     /// of the entry stores, reaching the target on that variant) instead of the undyed fiber
     /// (the thesis's noise is defined on it, and Table 10 times a monochromatic table).
@@ -69,6 +73,10 @@ pub struct FiberBenchArgs {
     /// With --thesis: override the spec's `bake.sampling` (random or sobol).
     #[arg(long, requires = "thesis", value_parser = sampling_arg)]
     pub sampling: Option<Sampling>,
+    /// With --thesis: override the spec's `bake.share_theta` (incoming directions sharing
+    /// their photons, 1–8).
+    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=8))]
+    pub share_theta: Option<u32>,
     /// Write the table to FILE, atomically, instead of standard output.
     #[arg(short = 'o', long = "out", value_name = "FILE")]
     pub out: Option<PathBuf>,
@@ -118,6 +126,10 @@ pub struct TraceArgs {
     /// With a spec entry: override its `bake.sampling` (random or sobol).
     #[arg(long, requires = "specs", value_parser = sampling_arg)]
     pub sampling: Option<Sampling>,
+    /// With a spec entry: override its `bake.share_theta` (directions sharing their photons,
+    /// 1–8; the direction is traced with the other θ rows of its block).
+    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=8))]
+    pub share_theta: Option<u32>,
     /// Write the outgoing slice as a false-colour log PNG (like Table 8) to FILE.png; with
     /// several --entry, FILE is a folder and each entry gets `<entry>.png` in it.
     #[arg(short = 'o', long = "out", alias = "png", value_name = "FILE")]
@@ -166,8 +178,15 @@ pub fn run(c: FiberCommand) -> anyhow::Result<()> {
 }
 
 /// A short label of an estimator: `split:exit_draws`, then `+ev` (inside exits scored in
-/// expectation) or `+ev+R` (and the first reflection), then `+sobol`.
-fn estimator_label(split: u32, exit: u32, ev: ExpectedExits, sampling: Sampling) -> String {
+/// expectation) or `+ev+R` (and the first reflection), then `+sobol`, then `+θk` (k
+/// directions sharing their photons).
+fn estimator_label(
+    split: u32,
+    exit: u32,
+    ev: ExpectedExits,
+    sampling: Sampling,
+    share: u32,
+) -> String {
     let ev = match ev {
         ExpectedExits::None => "",
         ExpectedExits::Inside => "+ev",
@@ -178,7 +197,12 @@ fn estimator_label(split: u32, exit: u32, ev: ExpectedExits, sampling: Sampling)
     } else {
         ""
     };
-    format!("{split}:{exit}{ev}{qmc}")
+    let share = if share > 1 {
+        format!("+θ{share}")
+    } else {
+        String::new()
+    };
+    format!("{split}:{exit}{ev}{qmc}{share}")
 }
 
 /// `--expected-exits`: a word of the spec's `bake.expected_exits`.
@@ -251,9 +275,12 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     let mut s = String::new();
     writeln!(
         s,
-        "one cross-section at the thesis's noise (2° bins; per direction the noise 16 M plain photons give), {} threads; {} stored directions per entry measured, scaled up",
+        "one cross-section at the thesis's noise (2° bins; per direction the noise 16 M plain photons give), {} threads; {} per entry measured (with `share_theta`, each with its group), scaled up",
         rayon::current_num_threads(),
-        a.directions
+        match a.columns {
+            Some(c) => format!("every stored θ row of {c} φ column(s)"),
+            None => format!("{} stored directions", a.directions),
+        }
     )?;
     writeln!(
         s,
@@ -278,6 +305,7 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
             exit_draws: a.exit_draws.unwrap_or(st.exit_draws),
             expected_exits: a.expected_exits.unwrap_or(st.expected_exits),
             sampling: a.sampling.unwrap_or(st.sampling),
+            share_theta: a.share_theta.unwrap_or(st.share_theta),
             ..st.clone()
         };
         let c = thesis::measure(
@@ -286,6 +314,7 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
             storage,
             a.dyed,
             a.directions,
+            a.columns,
             &crate::cancel::Cancel::NEVER,
         )?;
         let t10 = c.table_10_minutes;
@@ -298,7 +327,13 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
                 c.entry.clone()
             },
             c.stored_directions,
-            estimator_label(c.split, c.exit_draws, c.expected_exits, c.sampling),
+            estimator_label(
+                c.split,
+                c.exit_draws,
+                c.expected_exits,
+                c.sampling,
+                c.share_theta
+            ),
             c.photons_per_direction,
             c.seconds_per_direction,
             100.0 * c.median_rel_se,
@@ -546,6 +581,7 @@ fn targets_of(a: &TraceArgs) -> anyhow::Result<Vec<TraceTarget>> {
             exit_draws: a.exit_draws.unwrap_or(bake.exit_draws),
             expected_exits: a.expected_exits.unwrap_or(bake.expected_exits),
             sampling: a.sampling.unwrap_or(bake.sampling),
+            share_theta: a.share_theta.unwrap_or(bake.share_theta),
             ..bake.clone()
         };
         st.max_photons = st.max_photons.max(st.photons);
@@ -790,12 +826,13 @@ impl TraceReport {
                 (None, _) => String::new(),
             };
             outln!(
-                "  estimator         the bake's: {}° bins, split {}, exit_draws {}, expected_exits {:?}, sampling {:?}{target}",
+                "  estimator         the bake's: {}° bins, split {}, exit_draws {}, expected_exits {:?}, sampling {:?}, share_theta {}{target}",
                 st.res_deg,
                 st.split,
                 st.exit_draws,
                 st.expected_exits,
-                st.sampling
+                st.sampling,
+                st.share_theta
             )?;
             outln!(
                 "  noise             median relative error {:.2} % over {} bins (thesis: {:.2} %)",
@@ -867,6 +904,7 @@ impl TraceReport {
                 "exit_draws": st.exit_draws,
                 "expected_exits": st.expected_exits,
                 "sampling": st.sampling,
+                "share_theta": st.share_theta,
                 "target_rel_se": st.target,
                 "max_photons_per_direction": st.max_photons,
                 "batch": st.batch,

@@ -43,6 +43,13 @@
 //!   in order, so the stopping point does not depend on the thread count; it uses the median
 //!   over thousands of bins, a statistic nearly independent of any one bin's value, so the
 //!   bias of a data-dependent stop is far below the noise.
+//! - **Photons shared across θi** (`share_theta: k`, [`trace_group`],
+//!   [`super::tracer::shared`]): the stored directions of one φ column in a block of k θ rows
+//!   trace one set of photons; the beams of one φi meet the fiber at the same points, so one
+//!   walk inside serves every direction whose entry lobe could have produced it, weighted by
+//!   multiple importance sampling (balance heuristic over the k entry densities). Each
+//!   direction stays unbiased; a direction that reaches its target leaves the group, the
+//!   others go on.
 //!
 //! Standard errors come from the spread of independent batches (batch means), which is
 //! valid for split, stratified and adaptively stopped estimators alike, and for batches whose
@@ -55,10 +62,11 @@ use rayon::prelude::*;
 
 use super::scratch;
 use super::sweep::{ChannelKind, Channels};
-use super::tracer::{Draws, Exits, Setup};
+use super::tracer::shared::{SharedExits, MAX_SHARED};
+use super::tracer::{Draws, Exits, PhotonStats, Setup};
 use super::{Fiber, Incident};
 use crate::cancel::{Cancel, Cancelled};
-use crate::math::rng::{batch_rng, uniform};
+use crate::math::rng::{batch_rng, uniform, BatchRng};
 use crate::math::sampler::{PathSampler, Scramble};
 use formats::{AngularGrid, Precision};
 use rand_core::Rng;
@@ -106,6 +114,7 @@ pub struct Estimators {
     pub exit_draws: u32,
     pub expected_exits: ExpectedExits,
     pub sampling: Sampling,
+    pub share_theta: u32,
 }
 
 /// Settings of a bake (`bake:` in a fiber spec).
@@ -132,11 +141,20 @@ pub struct BakeSettings {
     pub sampling: Sampling,
     /// Which exit lobes are scored in expectation ([`super::lobe`]).
     pub expected_exits: ExpectedExits,
+    /// Incoming directions of one azimuth and neighbouring elevations that share their
+    /// photons ([`super::tracer::shared`]; 1: each traced alone). Left out of the written
+    /// settings (and the cache keys) at 1.
+    #[serde(skip_serializing_if = "is_one")]
+    pub share_theta: u32,
     pub precision: Precision,
     /// Mantissa bits kept (bit rounding; the type's full width is lossless).
     pub keep_bits: u32,
     pub channels: ChannelKind,
     pub lambda_nm: Vec<f64>,
+}
+
+fn is_one(x: &u32) -> bool {
+    *x == 1
 }
 
 impl Default for BakeSettings {
@@ -152,6 +170,7 @@ impl Default for BakeSettings {
             batch: 4096,
             sampling: Sampling::Random,
             expected_exits: ExpectedExits::None,
+            share_theta: 1,
             precision: Precision::F16,
             keep_bits: 10,
             channels: ChannelKind::Rgb,
@@ -179,6 +198,7 @@ impl BakeSettings {
             exit_draws: self.exit_draws,
             expected_exits: self.expected_exits,
             sampling: self.sampling,
+            share_theta: self.share_theta,
         }
     }
 
@@ -189,6 +209,7 @@ impl BakeSettings {
             exit_draws: e.exit_draws,
             expected_exits: e.expected_exits,
             sampling: e.sampling,
+            share_theta: e.share_theta,
             ..self.clone()
         }
     }
@@ -365,37 +386,127 @@ pub fn trace_slice(
 ) -> Result<SliceResult, Cancelled> {
     let start = Instant::now();
     let job = SliceJob {
-        setup: Setup::new(fiber, inc).with_expected_exits(
-            *grid,
-            s.expected_exits.inside(),
-            s.expected_exits.first_reflection(),
-        ),
+        setup: setup_of(fiber, inc, grid, s),
         inc,
         grid,
         channels,
         s,
         seed,
     };
-    // The first pass; with a target, groups of batches follow until the slice reaches it or
-    // the cap. The check sees the batches merged in order, so where a direction stops does
-    // not depend on the thread count.
+    let mut r = drive(
+        1,
+        grid,
+        channels,
+        s,
+        cancel,
+        start,
+        |b, _, launches, apart| vec![job.trace_batch(b, launches[0], apart)],
+    )?;
+    Ok(r.pop().expect("one slice"))
+}
+
+/// Traces the incoming bins `incs` of one azimuth and neighbouring elevations with shared
+/// photons ([`super::tracer::shared`]), seeded by `seeds[0]`: one result per bin, in order,
+/// each as [`trace_slice`] gives it (the group's photons; its seconds shared equally). Bins
+/// that cannot share (one alone, a smooth or cuticled fiber, other azimuths) are traced alone
+/// with their own `seeds`.
+pub fn trace_group(
+    fiber: &Fiber,
+    incs: &[Incident],
+    grid: &AngularGrid,
+    channels: &Channels,
+    s: &BakeSettings,
+    seeds: &[u64],
+    cancel: &Cancel,
+) -> Result<Vec<SliceResult>, Cancelled> {
+    let setups: Vec<Setup> = incs
+        .iter()
+        .map(|&inc| setup_of(fiber, inc, grid, s))
+        .collect();
+    if incs.len() < 2 || !Setup::can_share(&setups) {
+        return incs
+            .iter()
+            .zip(seeds)
+            .map(|(&inc, &seed)| trace_slice(fiber, inc, grid, channels, s, seed, cancel))
+            .collect();
+    }
+    let start = Instant::now();
+    let job = GroupJob {
+        setups,
+        phi_i: incs[0].phi_rad,
+        grid,
+        channels,
+        s,
+        seed: seeds[0],
+    };
+    drive(
+        incs.len(),
+        grid,
+        channels,
+        s,
+        cancel,
+        start,
+        |b, active, launches, apart| job.trace_batch(b, active, launches, apart),
+    )
+}
+
+/// A slice's tracer setup with the settings' expected-value scoring.
+fn setup_of<'a>(
+    fiber: &'a Fiber,
+    inc: Incident,
+    grid: &AngularGrid,
+    s: &BakeSettings,
+) -> Setup<'a> {
+    Setup::new(fiber, inc).with_expected_exits(
+        *grid,
+        s.expected_exits.inside(),
+        s.expected_exits.first_reflection(),
+    )
+}
+
+/// The batches of `k` slices traced together: `batch(b, active, launches, apart)` traces
+/// batch `b` of the slices still `active` (one score each, in order; `launches[i]` of slice
+/// i's first-reflection pass, tallied apart when `apart`). A first pass, then, with a target,
+/// groups of batches until every slice reaches it or the cap; a slice that reaches it stops
+/// there, and the others go on without it (every batch is an unbiased estimate of each slice
+/// it scores, so the batch-means error of batches traced by different groups stays right:
+/// independent terms of one mean). The check sees the batches merged in order, so where the
+/// slices stop does not depend on the thread count.
+fn drive(
+    k: usize,
+    grid: &AngularGrid,
+    channels: &Channels,
+    s: &BakeSettings,
+    cancel: &Cancel,
+    start: Instant,
+    batch: impl Fn(u64, &[bool], &[u64], bool) -> Vec<BatchScore> + Sync,
+) -> Result<Vec<SliceResult>, Cancelled> {
     let first = s.batches_for(s.photons);
     let cap = match s.target {
         Some(_) => s.batches_for(s.max_photons).max(first),
         None => first,
     };
-    let mut sums = SliceSums::new(grid, channels.len(), channels.per_variant());
+    let mut sums: Vec<SliceSums> = (0..k)
+        .map(|_| SliceSums::new(grid, channels.len(), channels.per_variant()))
+        .collect();
     let first_launches = match s.expected_exits.first_reflection() {
         true => (s.batch / FIRST_REFLECTION_SHARE).max(16),
         false => 0,
     };
-    let mut launches = first_launches;
+    let mut launches = vec![first_launches; k];
+    let mut active = vec![true; k];
     let mut b0 = 0;
     while b0 < cap {
         let mut group = GROUP;
         if b0 >= first {
             let Some(t) = s.target else { break };
-            match sums.batches_to(grid, t) {
+            let mut most = None;
+            for (a, x) in active.iter_mut().zip(&sums) {
+                let more = x.batches_to(grid, t);
+                *a = more.is_some();
+                most = most.max(more);
+            }
+            match most {
                 None => break,
                 Some(more) => group = more.min(GROUP),
             }
@@ -403,22 +514,55 @@ pub fn trace_slice(
         cancel.check()?;
         let b1 = (b0 + group).min(if b0 < first { first } else { cap });
         // The first pass tallies its reflection pass apart, to set the share that follows.
-        let apart = b0 < first && s.target.is_some() && launches > 0;
-        let parts: Vec<BatchScore> = (b0..b1)
+        let apart = b0 < first && s.target.is_some() && first_launches > 0;
+        let parts: Vec<Vec<BatchScore>> = (b0..b1)
             .into_par_iter()
-            .map(|b| job.trace_batch(b, launches, apart))
+            .map(|b| batch(b, &active, &launches, apart))
             .collect();
         for part in parts {
-            sums.add(&part);
-            scratch::recycle(part.local);
-            scratch::recycle(part.reflection);
+            let to = sums.iter_mut().zip(&active).filter(|(_, &a)| a);
+            for ((sum, _), p) in to.zip(part) {
+                sum.add(&p);
+                scratch::recycle(p.local);
+                scratch::recycle(p.reflection);
+            }
         }
         b0 = b1;
         if b0 == first && apart {
-            launches = sums.reflection_launches(grid, s.batch, first_launches);
+            for (l, sum) in launches.iter_mut().zip(&sums) {
+                *l = sum.reflection_launches(grid, s.batch, first_launches);
+            }
         }
     }
-    Ok(sums.into_result(grid, b0 * s.batch, start))
+    let mut out: Vec<SliceResult> = sums
+        .into_iter()
+        .map(|x| {
+            let launched = x.used * s.batch;
+            x.into_result(grid, launched, start)
+        })
+        .collect();
+    for r in &mut out {
+        r.seconds /= k as f64;
+    }
+    Ok(out)
+}
+
+/// Photon `j` of a batch of `n`: its uniform numbers (point `j` of the batch's scrambled
+/// Sobol' set, or the random stream) and, without a point set, its stratified entry offset
+/// (j + u)/n across the beam.
+fn photon_sampler<'r>(
+    rng: &'r mut BatchRng,
+    scramble: Option<&'r Scramble>,
+    j: u64,
+    n: u64,
+) -> (PathSampler<'r>, Option<f64>) {
+    match scramble {
+        Some(sc) => (PathSampler::sobol(rng, sc, j as u32), None),
+        None => {
+            let off = (j as f64 + uniform(rng.next_u64())) / n as f64;
+            (PathSampler::random(rng), Some(off))
+        }
+    }
 }
 
 /// What every batch of one incoming bin shares.
@@ -459,13 +603,7 @@ impl SliceJob<'_> {
         let n = s.batch;
         let scramble = (s.sampling == Sampling::Sobol).then(|| Scramble::draw(&mut rng));
         for j in 0..n {
-            let (mut u, off) = match &scramble {
-                Some(sc) => (PathSampler::sobol(&mut rng, sc, j as u32), None),
-                None => {
-                    let off = (j as f64 + uniform(rng.next_u64())) / n as f64;
-                    (PathSampler::random(&mut rng), Some(off))
-                }
-            };
+            let (mut u, off) = photon_sampler(&mut rng, scramble.as_ref(), j, n);
             let st = self.setup.photon(&mut u, off, s.draws(), &mut sc);
             h += st.hit as u64;
             if st.hit {
@@ -507,6 +645,102 @@ impl SliceJob<'_> {
     }
 }
 
+/// What every batch of a group of slices sharing their photons shares ([`trace_group`]).
+struct GroupJob<'a> {
+    setups: Vec<Setup<'a>>,
+    phi_i: f64,
+    grid: &'a AngularGrid,
+    channels: &'a Channels,
+    s: &'a BakeSettings,
+    seed: u64,
+}
+
+impl GroupJob<'_> {
+    /// Batch `b` of the `active` slices: `s.batch` photons they share
+    /// ([`Setup::photon_shared`]) at stratified entry offsets, then each one's own
+    /// first-reflection pass (`launches[i]` launches, tallied apart as well when `apart`), as
+    /// [`SliceJob::trace_batch`] does.
+    fn trace_batch(
+        &self,
+        b: u64,
+        active: &[bool],
+        launches: &[u64],
+        apart: bool,
+    ) -> Vec<BatchScore> {
+        let (grid, channels, s) = (self.grid, self.channels, self.s);
+        let setups: Vec<&Setup> = self
+            .setups
+            .iter()
+            .zip(active)
+            .filter_map(|(x, &a)| a.then_some(x))
+            .collect();
+        let launches: Vec<u64> = launches
+            .iter()
+            .zip(active)
+            .filter_map(|(&x, &a)| a.then_some(x))
+            .collect();
+        let k = setups.len();
+        let mut rng = batch_rng(self.seed, b);
+        let mut sc = ChannelScore::shared(grid, channels, self.phi_i, k);
+        let (mut hits, mut lost, mut gsum) = (0u64, vec![0.0; k], vec![0.0; k]);
+        let n = s.batch;
+        let scramble = (s.sampling == Sampling::Sobol).then(|| Scramble::draw(&mut rng));
+        let mut stats = [PhotonStats::default(); MAX_SHARED];
+        for j in 0..n {
+            let (mut u, off) = photon_sampler(&mut rng, scramble.as_ref(), j, n);
+            Setup::photon_shared(&setups, &mut u, off, s.draws(), &mut sc, &mut stats[..k]);
+            hits += stats[0].hit as u64;
+            for i in 0..k {
+                if stats[i].hit {
+                    gsum[i] += stats[i].g;
+                }
+                lost[i] += stats[i].lost;
+            }
+        }
+        let (local, total) = sc.finish();
+        let (nch, bins) = (channels.len(), grid.bins());
+        let mut out: Vec<BatchScore> = (0..k)
+            .map(|i| {
+                let mut own: Vec<f32> = scratch::zeroed(bins * nch);
+                for (bo, bl) in own.chunks_exact_mut(nch).zip(local.chunks_exact(k * nch)) {
+                    bo.copy_from_slice(&bl[i * nch..(i + 1) * nch]);
+                }
+                BatchScore {
+                    local: own,
+                    total: total[i * nch..(i + 1) * nch].to_vec(),
+                    reflection: Vec::new(),
+                    hits,
+                    lost: lost[i],
+                    g_sum: gsum[i],
+                }
+            })
+            .collect();
+        scratch::recycle(local);
+        // Each slice's first-reflection pass, as for a slice traced alone.
+        for (i, o) in out.iter_mut().enumerate() {
+            if launches[i] == 0 {
+                continue;
+            }
+            let mut pass = ChannelScore::new(grid, channels, self.phi_i);
+            let scramble = Scramble::draw(&mut rng);
+            let scale = n as f64 / launches[i] as f64;
+            for l in 0..launches[i] {
+                let mut u = PathSampler::sobol(&mut rng, &scramble, l as u32);
+                setups[i].first_reflection(&mut u, None, scale, &mut pass);
+            }
+            let (local, total) = pass.finish();
+            o.local.iter_mut().zip(&local).for_each(|(a, x)| *a += x);
+            o.total.iter_mut().zip(&total).for_each(|(a, x)| *a += x);
+            if apart {
+                o.reflection = local;
+            } else {
+                scratch::recycle(local);
+            }
+        }
+        out
+    }
+}
+
 /// One batch's scores: weight per bin and channel, each exit weighted by every channel's
 /// attenuation over its path ([`Channels::add_weighted`], evaluated once per path length).
 ///
@@ -527,6 +761,12 @@ impl SliceJob<'_> {
 /// channel's albedo rounds above one.
 struct ChannelScore<'a> {
     local: Vec<f32>,
+    /// Per slice of a shared photon's group ([`crate::fiber::tracer::shared`]; one slice,
+    /// weight 1, otherwise): the weight of what is scored, applied to its row of channels.
+    weights: Vec<f64>,
+    /// One path length's channel attenuations ([`Channels::add_weighted`]).
+    dye: Vec<f64>,
+    /// `weights` ⊗ `dye`: slice-major, `[slice][channel]`.
     row: Vec<f64>,
     /// `row` in `f32`, as the tallies add it.
     row32: Vec<f32>,
@@ -542,9 +782,16 @@ struct ChannelScore<'a> {
 
 impl<'a> ChannelScore<'a> {
     fn new(grid: &AngularGrid, channels: &'a Channels, phi_i: f64) -> Self {
-        let nch = channels.len();
+        Self::shared(grid, channels, phi_i, 1)
+    }
+
+    /// The scores of `slices` slices at once, `[bin][slice][channel]`.
+    fn shared(grid: &AngularGrid, channels: &'a Channels, phi_i: f64, slices: usize) -> Self {
+        let nch = channels.len() * slices;
         ChannelScore {
             local: scratch::zeroed(grid.bins() * nch),
+            weights: vec![1.0; slices],
+            dye: vec![0.0; channels.len()],
             row: vec![0.0; nch],
             row32: vec![0.0; nch],
             total: vec![0.0; nch],
@@ -590,8 +837,14 @@ impl Exits for ChannelScore<'_> {
     fn leave_bin(&mut self, bin: u32, path_um: f64, w: f64) {
         if path_um != self.last {
             self.settle();
-            self.row.iter_mut().for_each(|x| *x = 0.0);
-            self.channels.add_weighted(path_um, 1.0, &mut self.row);
+            self.dye.iter_mut().for_each(|x| *x = 0.0);
+            self.channels.add_weighted(path_um, 1.0, &mut self.dye);
+            let nc = self.dye.len();
+            for (k, &wk) in self.weights.iter().enumerate() {
+                for (c, &x) in self.dye.iter().enumerate() {
+                    self.row[k * nc + c] = wk * x;
+                }
+            }
             for (a, &x) in self.row32.iter_mut().zip(&self.row) {
                 *a = x as f32;
             }
@@ -605,6 +858,16 @@ impl Exits for ChannelScore<'_> {
             w as f32,
             &self.row32,
         );
+    }
+}
+
+impl SharedExits for ChannelScore<'_> {
+    fn set_weights(&mut self, w: &[f64]) {
+        if w != self.weights.as_slice() {
+            self.settle();
+            self.weights.copy_from_slice(w);
+            self.last = f64::NAN;
+        }
     }
 }
 

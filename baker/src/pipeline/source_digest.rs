@@ -411,7 +411,8 @@ mod tests {
         }
         for f in [
             "crate/fiber/slices.rs",
-            "crate/fiber/tracer.rs",
+            "crate/fiber/tracer/mod.rs",
+            "crate/fiber/tracer/shared.rs",
             "crate/fiber/surface.rs",
             "crate/fiber/sweep.rs",
             "crate/fiber/section/polygon.rs",

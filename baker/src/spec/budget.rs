@@ -224,7 +224,9 @@ fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
             * nch
             * grid_bins
             * value_bytes;
-        let in_flight = 2.0 * t * 18.0 * per_slice;
+        // Batches in flight hold every slice of a group sharing its photons.
+        let share = f64::from(e.estimators.share_theta.max(1));
+        let in_flight = 2.0 * t * 18.0 * per_slice * share;
         memory = memory.max(3.0 * unit + in_flight + 8192.0 * nch * 8.0 + tables);
     }
     Cost {

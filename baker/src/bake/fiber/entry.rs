@@ -42,6 +42,8 @@ pub struct EntryReport {
     /// Expected-value exit scoring and the sampler (`bake.expected_exits`, `bake.sampling`).
     pub expected_exits: crate::fiber::slices::ExpectedExits,
     pub sampling: crate::fiber::slices::Sampling,
+    /// Incoming directions sharing their photons (`share_theta`; 1: each traced alone).
+    pub share_theta: u32,
     /// Adaptive allocation's target (`null`: a fixed count per direction) and cap.
     pub target_rel_se: Option<NoiseTarget>,
     pub max_photons_per_direction: u64,
@@ -167,8 +169,7 @@ impl Tallies {
 
 impl EntryBake<'_> {
     fn n_units(&self) -> usize {
-        let n_wi = self.setup.stored.len();
-        n_wi.div_ceil(unit_len(n_wi))
+        self.setup.units(self.st.share_theta).len()
     }
 
     /// The results of unit `u` (its stored directions, every section), from the cache or
@@ -184,31 +185,64 @@ impl EntryBake<'_> {
         let (id, key) = unit_id_key(&self.prefix, chunk, &s.stored, &s.key_base);
         let photons = (chunk.len() * s.fibers.len()) as u64 * st.photons;
         let r = runner.unit_deferred(&id, key, Some(self.first_unit + u), photons, || {
-            Ok(chunk
+            // The unit's groups of directions sharing their photons (each direction alone
+            // without `share_theta`), traced in parallel, each section in turn.
+            let mut groups: Vec<Vec<usize>> = Vec::new();
+            let mut placed = std::collections::BTreeSet::new();
+            for &i in chunk {
+                if placed.insert(i) {
+                    let g = s.share_group(i, st.share_theta as usize);
+                    placed.extend(g.iter().copied());
+                    groups.push(g);
+                }
+            }
+            let traced = groups
                 .par_iter()
-                .map(|&i| {
-                    let b = s.stored[i];
-                    let inc = incident_of_bin(&s.grid, b / s.grid.n_phi, b % s.grid.n_phi);
+                .map(|g| {
+                    let bins: Vec<usize> = g.iter().map(|&i| s.stored[i]).collect();
+                    let incs: Vec<_> = bins
+                        .iter()
+                        .map(|&b| incident_of_bin(&s.grid, b / s.grid.n_phi, b % s.grid.n_phi))
+                        .collect();
                     (0..s.fibers.len())
                         .map(|k| {
-                            let seed = coordinate_seed(st.seed, &[s.seed_base, k as u64, b as u64]);
-                            let r = bake::trace_slice(
+                            let seeds: Vec<u64> = bins
+                                .iter()
+                                .map(|&b| {
+                                    coordinate_seed(st.seed, &[s.seed_base, k as u64, b as u64])
+                                })
+                                .collect();
+                            let r = bake::trace_group(
                                 &s.fibers[k],
-                                inc,
+                                &incs,
                                 &s.grid,
                                 &s.channels,
                                 st,
-                                seed,
+                                &seeds,
                                 &runner.cancel,
                             );
                             if let Some(bar) = bar {
-                                bar.advance(1);
+                                bar.advance(g.len() as u64);
                             }
                             r
                         })
                         .collect::<Result<Vec<_>, _>>()
                 })
-                .collect::<Result<Vec<_>, _>>()?)
+                .collect::<Result<Vec<_>, _>>()?;
+            // Back to the unit's order: per direction, its sections' slices.
+            let mut by_dir: std::collections::BTreeMap<usize, Vec<bake::SliceResult>> =
+                Default::default();
+            for (g, per_section) in groups.iter().zip(traced) {
+                for section in per_section {
+                    for (&i, r) in g.iter().zip(section) {
+                        by_dir.entry(i).or_default().push(r);
+                    }
+                }
+            }
+            Ok(chunk
+                .iter()
+                .map(|i| by_dir.remove(i).unwrap_or_default())
+                .collect())
         })?;
         Ok(r)
     }
@@ -216,9 +250,9 @@ impl EntryBake<'_> {
     /// A shard traces its units into the cache; `baker merge` writes the tables.
     fn units_only(&self) -> anyhow::Result<()> {
         let phase = self.begin_phase();
-        let all: Vec<usize> = (0..self.setup.stored.len()).collect();
+        let units = self.setup.units(self.st.share_theta);
         let r = (|| {
-            for (u, chunk) in all.chunks(unit_len(all.len())).enumerate() {
+            for (u, chunk) in units.iter().enumerate() {
                 if let Some(unit) = self.unit_results(u, chunk, Some(&*phase))? {
                     unit.stored()?;
                 }
@@ -303,7 +337,7 @@ pub fn bake_entry(
 fn announce(eb: &EntryBake) {
     let s = &eb.setup;
     eb.job.runner.events.say(format!(
-        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons{} (split {}, exit draws {}, expected exits {:?}, sampling {:?}), {} variant(s) × {} channel(s)",
+        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons{} (split {}, exit draws {}, expected exits {:?}, sampling {:?}, shared by {} θ rows), {} variant(s) × {} channel(s)",
         eb.e.name,
         s.fibers.len(),
         s.sym.describe(),
@@ -326,6 +360,7 @@ fn announce(eb: &EntryBake) {
         eb.st.exit_draws,
         eb.st.expected_exits,
         eb.st.sampling,
+        eb.st.share_theta,
         s.variants.len(),
         s.channels.per_variant()
     ));
@@ -437,6 +472,7 @@ fn table_metadata(eb: &EntryBake, name: &str, t: usize) -> serde_json::Value {
         "symmetry": eb.setup.sym, "photons_per_direction": st.photons_per_direction(),
         "split": st.split, "exit_draws": st.exit_draws,
         "expected_exits": st.expected_exits, "sampling": st.sampling,
+        "share_theta": st.share_theta,
         "target_rel_se": st.target, "max_photons_per_direction": st.max_photons,
         "seed": st.seed, "lambda_nm": st.lambda_nm,
         "channels": st.channels, "quantise_to_se": eb.spec.storage.quantise_to_se,
@@ -468,8 +504,7 @@ fn trace_units(
     outs: &mut [TableOut],
     tallies: &mut Tallies,
 ) -> anyhow::Result<()> {
-    let n_wi = eb.setup.stored.len();
-    let all: Vec<usize> = (0..n_wi).collect();
+    let units = eb.setup.units(eb.st.share_theta);
     std::thread::scope(|scope| -> anyhow::Result<()> {
         let (tx, rx) = std::sync::mpsc::sync_channel::<(&[usize], Computed<UnitSlices>)>(0);
         let writer = scope.spawn(move || -> anyhow::Result<()> {
@@ -485,11 +520,11 @@ fn trace_units(
             }
             Ok(())
         });
-        for (u, chunk) in all.chunks(unit_len(n_wi)).enumerate() {
+        for (u, chunk) in units.iter().enumerate() {
             let results = eb
                 .unit_results(u, chunk, Some(phase))?
                 .ok_or_else(|| anyhow::anyhow!("unit {} of {} is not available", u, eb.e.name))?;
-            if tx.send((chunk, results)).is_err() {
+            if tx.send((chunk.as_slice(), results)).is_err() {
                 // The writer stopped with an error: it tells which below.
                 break;
             }
@@ -692,6 +727,7 @@ fn report(
         exit_draws: st.exit_draws,
         expected_exits: st.expected_exits,
         sampling: st.sampling,
+        share_theta: st.share_theta,
         target_rel_se: st.target,
         max_photons_per_direction: st.max_photons,
         variants: s.channels.variants.clone(),

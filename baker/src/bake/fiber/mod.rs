@@ -28,7 +28,7 @@ use setup::entry_setup;
 
 use super::manifest::{self, Kind, Manifest, Timing};
 use crate::bake::job::Job;
-use crate::fiber::slices::{unit_len, BakeSettings};
+use crate::fiber::slices::BakeSettings;
 use crate::files::Shown;
 use crate::output::manifest::file_entry;
 use crate::pipeline::{Cache, UnitInfo};
@@ -171,10 +171,8 @@ pub fn plan_entry(
     cost: Option<(f64, usize)>,
 ) -> anyhow::Result<Vec<UnitInfo>> {
     let setup = entry_setup(e, st)?;
-    let n_wi = setup.stored.len();
-    let all: Vec<usize> = (0..n_wi).collect();
     let mut out = Vec::new();
-    for chunk in all.chunks(unit_len(n_wi)) {
+    for chunk in &setup.units(st.share_theta) {
         let prefix = format!("{stem}/{}", e.name);
         let (id, key) = setup::unit_id_key(&prefix, chunk, &setup.stored, &setup.key_base);
         let cached = cache.path(&key).exists();

@@ -6,11 +6,13 @@
 //!
 //! Two differences from a bake, both deliberate: the beam comes from exactly (θi, φi), not
 //! averaged over the bin that contains it, and there is one channel (the fraction of the
-//! intercepted power at one wavelength) instead of the entry's dye sweep.
+//! intercepted power at one wavelength) instead of the entry's dye sweep. Under
+//! `share_theta` the direction is traced with the directions a bake would share its photons
+//! with: (θi + k·res, φi) for the other θ rows of its block, its result the one returned.
 
 use super::setup::typical_path_um;
 use crate::cancel::{Cancel, Cancelled};
-use crate::fiber::slices::{trace_slice, BakeSettings, SliceResult};
+use crate::fiber::slices::{trace_group, BakeSettings, SliceResult};
 use crate::fiber::sweep::{ChannelKind, Channels, Variant};
 use crate::fiber::{Fiber, Incident};
 use formats::AngularGrid;
@@ -50,14 +52,29 @@ pub fn trace_direction(
         ChannelKind::Spectral,
         typical_path_um(fiber),
     );
-    Ok(
-        trace_slice(fiber, inc, &grid, &channels, st, seed, cancel).map(|result| DirectionTrace {
+    // The θ rows of the direction's block ([`super::setup::EntrySetup::share_group`]).
+    let k = st.share_theta.max(1) as usize;
+    let res = st.res_deg.to_radians();
+    let it = (((inc.theta_rad + 0.5 * std::f64::consts::PI) / res).floor() as usize)
+        .min(grid.n_theta - 1);
+    let it0 = it / k * k;
+    let incs: Vec<Incident> = (it0..(it0 + k).min(grid.n_theta))
+        .map(|t| Incident {
+            theta_rad: inc.theta_rad + (t as f64 - it as f64) * res,
+            ..inc
+        })
+        .collect();
+    let seeds = vec![seed; incs.len()];
+    let traced = trace_group(fiber, &incs, &grid, &channels, st, &seeds, cancel);
+    Ok(traced.map(|mut all| {
+        let result = all.swap_remove(it - it0);
+        DirectionTrace {
             grid,
             reached_target: st.target.map(|t| t.met_by(&result.noise)),
             projected_width_um: fiber.projected_width_um(inc.phi_rad),
             result,
-        }),
-    )
+        }
+    }))
 }
 
 #[cfg(test)]

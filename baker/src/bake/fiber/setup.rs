@@ -1,12 +1,13 @@
 //! What a fiber entry's work units are made of, and their ids and keys.
 
-use crate::fiber::slices::BakeSettings;
+use crate::fiber::slices::{unit_len, BakeSettings};
 use crate::fiber::sweep::{Channels, Variant};
 use crate::fiber::symmetry::Symmetry;
 use crate::fiber::{AngularGrid, Fiber};
 use crate::math::rng::fnv1a;
 use crate::pipeline::KeyBuilder;
 use crate::spec::fiber::FiberEntry;
+use formats::bcsdf::{FLIP_DPHI, FLIP_THETA};
 
 /// The variants of an entry as μa spectra.
 pub fn variants_of(e: &FiberEntry, lambda_nm: &[f64]) -> Vec<Variant> {
@@ -44,6 +45,62 @@ pub struct EntrySetup {
 }
 
 impl EntrySetup {
+    /// The stored directions (indices into `stored`, ascending) that trace one set of photons
+    /// with stored direction `i` under `share_theta` = `k` ([`crate::fiber::tracer::shared`]):
+    /// the stored bins of its φ column whose θ rows fall in its block of `k` rows (rows
+    /// [⌊it/k⌋·k, ⌊it/k⌋·k + k)). A function of the grid and the symmetries alone, so every
+    /// unit and shard forms the same groups.
+    pub fn share_group(&self, i: usize, k: usize) -> Vec<usize> {
+        let g = &self.grid;
+        let b = self.stored[i];
+        let (it, jp) = (b / g.n_phi, b % g.n_phi);
+        let k = k.max(1);
+        let it0 = it / k * k;
+        (it0..(it0 + k).min(g.n_theta))
+            .filter_map(|t| {
+                let x = t * g.n_phi + jp;
+                let s = (self.map[x] & !(FLIP_THETA | FLIP_DPHI)) as usize;
+                (self.stored[s] == x).then_some(s)
+            })
+            .collect()
+    }
+
+    /// The work units of a bake with `share_theta` = `k`: lists of stored directions (indices
+    /// into `stored`, ascending). Without sharing, consecutive runs of
+    /// [`crate::fiber::slices::unit_len`]; with it, whole groups ([`EntrySetup::share_group`],
+    /// in the order of their first direction) gathered until a unit holds that many, so a
+    /// unit's directions are a block of θ rows over a run of φ columns. A function of the grid
+    /// and the symmetries alone (the units, their ids and keys are the same on every machine
+    /// and in every shard).
+    pub fn units(&self, k: u32) -> Vec<Vec<usize>> {
+        let n = self.stored.len();
+        let len = unit_len(n);
+        if k <= 1 {
+            let all: Vec<usize> = (0..n).collect();
+            return all.chunks(len).map(<[usize]>::to_vec).collect();
+        }
+        let mut placed = vec![false; n];
+        let (mut units, mut unit) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            if placed[i] {
+                continue;
+            }
+            for m in self.share_group(i, k as usize) {
+                placed[m] = true;
+                unit.push(m);
+            }
+            if unit.len() >= len {
+                unit.sort_unstable();
+                units.push(std::mem::take(&mut unit));
+            }
+        }
+        if !unit.is_empty() {
+            unit.sort_unstable();
+            units.push(unit);
+        }
+        units
+    }
+
     /// The stored incoming directions' bin centres, (θi, φi) in degrees.
     pub fn wi_deg(&self) -> Vec<[f64; 2]> {
         let g = &self.grid;

@@ -153,19 +153,20 @@ impl TableOut {
             f,
             cdf_theta,
             cdf_phi,
-            albedo: Vec::new(),
-            albedo_se: Vec::new(),
-            photons: Vec::new(),
-            noise: Vec::new(),
+            albedo: vec![f32::NAN; n_wi * nv * nc],
+            albedo_se: vec![f32::NAN; n_wi * nv * nc],
+            photons: vec![0; n_wi],
+            noise: vec![[f32::NAN; 2]; n_wi],
             group: g,
             quantise_to_se: l.quantise_to_se,
             zstd_level: l.zstd_level,
         })
     }
 
-    /// Stored direction `i`'s slice: encoded into the stream, decoded values and sampling
-    /// CDFs into the HDF5 group; what the direction reached (`photons` launched for it, and
-    /// the slice's own noise when it was traced, not averaged) into its records.
+    /// Stored direction `i`'s slice (in any order, each once): encoded into the stream,
+    /// decoded values and sampling CDFs into the HDF5 group; what the direction reached
+    /// (`photons` launched for it, and the slice's own noise when it was traced, not
+    /// averaged) into its records.
     pub fn push(
         &mut self,
         i: usize,
@@ -176,20 +177,27 @@ impl TableOut {
     ) -> anyhow::Result<()> {
         let (nt, np) = (grid.n_theta, grid.n_phi);
         let nv = self.writer.dir.variants.len();
-        let decoded = push_slice(
+        let decoded = push_slice_at(
             &mut self.writer,
+            i,
             r,
             grid,
             self.quantise_to_se,
             self.zstd_level,
         )?;
-        self.albedo.extend(r.albedo.iter().map(|&x| x as f32));
-        self.albedo_se.extend(r.albedo_se.iter().map(|&x| x as f32));
-        self.photons.push(photons);
-        self.noise.push(match traced && r.noise.bins > 0 {
+        let nvc = r.albedo.len();
+        let at = i * nvc..(i + 1) * nvc;
+        for (a, &x) in self.albedo[at.clone()].iter_mut().zip(&r.albedo) {
+            *a = x as f32;
+        }
+        for (a, &x) in self.albedo_se[at].iter_mut().zip(&r.albedo_se) {
+            *a = x as f32;
+        }
+        self.photons[i] = photons;
+        self.noise[i] = match traced && r.noise.bins > 0 {
             true => [r.noise.median_rel_se as f32, r.noise.thesis_rel_se as f32],
             false => [f32::NAN; 2],
-        });
+        };
         h5out::write_chunk_f32(&self.f, &[i, 0, 0, 0, 0], &decoded)?;
         let (ct, cp, _) = bcsdf::sampling_cdfs(&self.writer.dir, &decoded);
         let ct: Vec<f32> = ct.iter().flatten().map(|&x| x as f32).collect();
@@ -324,13 +332,26 @@ pub fn push_slice(
     quantise_to_se: f64,
     zstd_level: ZstdLevel,
 ) -> anyhow::Result<Vec<f32>> {
+    let next = w.frame_bytes().count();
+    push_slice_at(w, next, r, grid, quantise_to_se, zstd_level)
+}
+
+/// [`push_slice`] as stored direction `i` (in any order, [`Writer::push_within_at`]).
+pub fn push_slice_at(
+    w: &mut Writer,
+    i: usize,
+    r: &SliceResult,
+    grid: &AngularGrid,
+    quantise_to_se: f64,
+    zstd_level: ZstdLevel,
+) -> anyhow::Result<Vec<f32>> {
     let nc = w.dir.channels.len();
     let tol = noise_tolerance(r, nc, grid.bins(), quantise_to_se);
     if zstd_level == ZstdLevel::Auto {
         let raw_bytes = w.dir.variants.len() * nc * grid.bins() * w.dir.dtype.size();
         w.set_level(auto_zstd_level(r.launched, raw_bytes));
     }
-    Ok(w.push_within(&r.normalised(grid), tol.as_deref())?)
+    Ok(w.push_within_at(i, &r.normalised(grid), tol.as_deref())?)
 }
 
 /// The relative rounding tolerance of every bin of `r`'s slice (θo × Δφ): `q` times the

@@ -18,7 +18,7 @@ use serde::Serialize;
 use super::setup::{entry_setup, typical_path_um, EntrySetup};
 use super::tables::{push_slice, Layout};
 use crate::cancel::Cancel;
-use crate::fiber::slices::{incident_of_bin, trace_slice, BakeSettings, NoiseTarget, SliceResult};
+use crate::fiber::slices::{incident_of_bin, trace_group, BakeSettings, NoiseTarget, SliceResult};
 use crate::fiber::sweep::{Channels, Variant};
 use crate::math::rng::coordinate_seed;
 use crate::spec::fiber::{FiberEntry, TableStorage};
@@ -58,6 +58,8 @@ pub struct ThesisCost {
     pub exit_draws: u32,
     pub expected_exits: crate::fiber::slices::ExpectedExits,
     pub sampling: crate::fiber::slices::Sampling,
+    /// Directions sharing their photons (`share_theta`).
+    pub share_theta: u32,
     /// Mean over the measured directions.
     pub photons_per_direction: f64,
     pub seconds_per_direction: f64,
@@ -87,6 +89,7 @@ pub fn measure(
     storage: &TableStorage,
     dyed: bool,
     directions: usize,
+    columns: Option<usize>,
     cancel: &Cancel,
 ) -> anyhow::Result<ThesisCost> {
     let st = BakeSettings {
@@ -113,21 +116,63 @@ pub fn measure(
     );
     let n = s.stored.len();
     let k = directions.clamp(1, n);
+    // The stored directions measured: `k` evenly spread, or with `columns` every stored θ
+    // row of that many evenly spread φ columns (the same directions whatever `share_theta`).
+    let starts: Vec<usize> = match columns {
+        None => (0..k).map(|i| (2 * i + 1) * n / (2 * k)).collect(),
+        Some(c) => {
+            let n_phi = s.grid.n_phi;
+            let row0: Vec<usize> = s.stored.iter().copied().filter(|&b| b < n_phi).collect();
+            let c = c.clamp(1, row0.len().max(1));
+            let mut v = Vec::new();
+            for j in 0..c {
+                let jp = row0[(2 * j + 1) * row0.len() / (2 * c)];
+                v.extend((0..n).filter(|&i| s.stored[i] % n_phi == jp));
+            }
+            v
+        }
+    };
+    let mut done = vec![false; n];
     let (mut secs, mut photons, mut noise, mut thesis, mut capped) = (0.0, 0.0, 0.0, 0.0, 0);
     let mut sample = Sample::new(&s, &variant.name, &st, storage);
-    for i in 0..k {
-        let b = s.stored[(2 * i + 1) * n / (2 * k)];
-        let inc = incident_of_bin(&s.grid, b / s.grid.n_phi, b % s.grid.n_phi);
-        let seed = coordinate_seed(st.seed, &[s.seed_base, 0, b as u64]);
-        let r = trace_slice(&s.fibers[0], inc, &s.grid, &s.channels, &st, seed, cancel)?;
-        secs += r.seconds;
-        photons += r.launched as f64;
-        noise += r.noise.median_rel_se;
-        thesis += r.noise.thesis_rel_se;
-        capped += usize::from(!NoiseTarget::Thesis.met_by(&r.noise));
-        sample.push(&r, &s, storage)?;
+    // With `share_theta`, each measured direction's whole group (a group's photons serve
+    // all of its directions, so its time is theirs together).
+    let mut measured = 0;
+    for i in starts {
+        if done[i] {
+            continue;
+        }
+        let members = s.share_group(i, st.share_theta as usize);
+        members.iter().for_each(|&m| done[m] = true);
+        let bins: Vec<usize> = members.iter().map(|&m| s.stored[m]).collect();
+        let incs: Vec<_> = bins
+            .iter()
+            .map(|&b| incident_of_bin(&s.grid, b / s.grid.n_phi, b % s.grid.n_phi))
+            .collect();
+        let seeds: Vec<u64> = bins
+            .iter()
+            .map(|&b| coordinate_seed(st.seed, &[s.seed_base, 0, b as u64]))
+            .collect();
+        let rs = trace_group(
+            &s.fibers[0],
+            &incs,
+            &s.grid,
+            &s.channels,
+            &st,
+            &seeds,
+            cancel,
+        )?;
+        for r in &rs {
+            secs += r.seconds;
+            photons += r.launched as f64;
+            noise += r.noise.median_rel_se;
+            thesis += r.noise.thesis_rel_se;
+            capped += usize::from(!NoiseTarget::Thesis.met_by(&r.noise));
+            sample.push(r, &s, storage)?;
+            measured += 1;
+        }
     }
-    let kf = k as f64;
+    let (k, kf) = (measured, measured as f64);
     let bytes_per_direction = sample.bytes_per_direction();
     Ok(ThesisCost {
         entry: e.name.clone(),
@@ -139,6 +184,7 @@ pub fn measure(
         exit_draws: st.exit_draws,
         expected_exits: st.expected_exits,
         sampling: st.sampling,
+        share_theta: st.share_theta,
         photons_per_direction: photons / kf,
         seconds_per_direction: secs / kf,
         median_rel_se: noise / kf,

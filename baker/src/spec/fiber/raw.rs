@@ -50,6 +50,11 @@ pub struct RawBake {
     /// photons one randomised Sobol' point set over the launch and the first boundary
     /// events).
     pub sampling: Option<Spanned<String>>,
+    /// Incoming directions that share their photons: up to this many stored directions of one
+    /// azimuth and neighbouring elevations trace one set of photons together, each weighted
+    /// for its own direction (a whole number in [1, 8]; 1 = each traced alone). Used on
+    /// straight fibers with a rough surface; others trace each direction alone.
+    pub share_theta: Option<Spanned<f64>>,
     /// Adaptive allocation: each incoming direction traces past `photons_per_direction` until
     /// the median relative standard error of its table (over bins with f̂ ≥ 1 % of the
     /// slice's maximum) is at most this: a number in (0, 0.5], or `thesis` for the noise plain
@@ -188,6 +193,8 @@ pub struct RawEstimators {
     pub expected_exits: Option<Spanned<String>>,
     /// Where the photons take their uniform numbers: `random` or `sobol` (as `bake.sampling`).
     pub sampling: Option<Spanned<String>>,
+    /// Incoming directions that share their photons (as `bake.share_theta`).
+    pub share_theta: Option<Spanned<f64>>,
 }
 
 /// Exactly one of `shape` (a generator, or `ellipse` with `ratio`), `polygon` (CSV) or `mask`

@@ -45,6 +45,7 @@ fn estimators(b: &mut Value) {
         &keys(&super::settings::EXPECTED_EXITS),
     );
     names(prop(b, "sampling"), &keys(&super::settings::SAMPLINGS));
+    bound(prop(b, "share_theta"), super::settings::SHARE_THETA);
 }
 
 /// Depth of shade, percent (§5.3.1's range of ζ).

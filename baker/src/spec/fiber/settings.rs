@@ -22,6 +22,9 @@ pub(in crate::spec) const SEED: Bounds = Bounds::whole(0.0, 9_007_199_254_740_99
 pub(in crate::spec) const SPLIT: Bounds = Bounds::whole(1.0, 64.0);
 /// `bake.exit_draws`: draws per boundary event met from inside.
 pub(in crate::spec) const EXIT_DRAWS: Bounds = Bounds::whole(1.0, 256.0);
+/// `bake.share_theta`: incoming directions sharing their photons
+/// (`crate::fiber::tracer::shared::MAX_SHARED` at most).
+pub(in crate::spec) const SHARE_THETA: Bounds = Bounds::whole(1.0, 8.0);
 /// `bake.target_rel_se` as a number: a relative standard error.
 pub(in crate::spec) const TARGET_REL_SE: Bounds = Bounds::above(0.0, 0.5);
 /// `bake.max_photons_per_direction`: the cap of adaptive allocation.
@@ -71,6 +74,7 @@ struct EstimatorFields<'a> {
     exit_draws: &'a Option<Spanned<f64>>,
     expected_exits: &'a Option<Spanned<String>>,
     sampling: &'a Option<Spanned<String>>,
+    share_theta: &'a Option<Spanned<f64>>,
 }
 
 /// `bake.zstd_level` as a number.
@@ -171,6 +175,7 @@ impl FiberCx {
             exit_draws: &b.exit_draws,
             expected_exits: &b.expected_exits,
             sampling: &b.sampling,
+            share_theta: &b.share_theta,
         };
         let estimators = self.estimator_fields("bake", fields, d.estimators());
         let target = b.target_rel_se.as_ref().and_then(|t| self.noise_target(t));
@@ -212,6 +217,7 @@ impl FiberCx {
             exit_draws: &r.exit_draws,
             expected_exits: &r.expected_exits,
             sampling: &r.sampling,
+            share_theta: &r.share_theta,
         };
         self.estimator_fields("fibers.estimators", fields, bake.estimators())
     }
@@ -237,6 +243,13 @@ impl FiberCx {
                 d.expected_exits,
             ),
             sampling: self.opt_choice(&field("sampling"), f.sampling, &SAMPLINGS, d.sampling),
+            share_theta: self.count(
+                &field("share_theta"),
+                f.share_theta,
+                SHARE_THETA.lo,
+                SHARE_THETA.hi,
+                d.share_theta as u64,
+            ) as u32,
         }
     }
 

@@ -13,6 +13,8 @@
 //! the walk of a photon does not depend on μa, so one trace serves every dye, depth of shade
 //! and wavelength (Beer–Lambert weights exp(−μa·ℓ)).
 
+pub mod shared;
+
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -345,17 +347,28 @@ impl<'a> Setup<'a> {
     /// A photon's ray at launch and its spread weight g.
     #[inline]
     fn launch(&self, u: &mut PathSampler, offset: Option<f64>) -> (Ray, f64) {
-        let (d, dhat, e_perp, beam, g) = match self.inc.spread {
+        let spread = self.inc.spread.map(|_| (u.launch(0), u.launch(1)));
+        let f = offset.unwrap_or_else(|| u.launch(2));
+        let z = self.cuticle.map(|_| u.launch(3));
+        self.launch_at(spread, f, z)
+    }
+
+    /// [`Setup::launch`] at given launch numbers: `spread`, the uniform numbers that place ωi
+    /// in its bin (used when the incident has a spread), `f` the offset across the beam and
+    /// `z` the uniform number of the height along a cuticle period.
+    #[inline]
+    fn launch_at(&self, spread: Option<(f64, f64)>, f: f64, z: Option<f64>) -> (Ray, f64) {
+        let (d, dhat, e_perp, beam, g) = match self.inc.spread.zip(spread) {
             None => (self.d, self.dhat, self.e_perp, self.beam, 1.0),
-            Some((dt, dp)) => {
+            Some(((dt, dp), (u0, u1))) => {
                 // Uniform in solid angle: uniform in sin θ and φ.
                 let (s0, s1) = (
                     (self.inc.theta_rad - 0.5 * dt).sin(),
                     (self.inc.theta_rad + 0.5 * dt).sin(),
                 );
-                let st = s0 + (s1 - s0) * u.launch(0);
+                let st = s0 + (s1 - s0) * u0;
                 let ct = (1.0 - st * st).max(0.0).sqrt();
-                let phi = self.inc.phi_rad + dp * (u.launch(1) - 0.5);
+                let phi = self.inc.phi_rad + dp * (u1 - 0.5);
                 let (sp, cp) = phi.sin_cos();
                 let dhat = [-cp, -sp];
                 let e_perp = [sp, -cp];
@@ -365,13 +378,12 @@ impl<'a> Setup<'a> {
                 ([-ct * cp, -ct * sp, -st], dhat, e_perp, beam, g)
             }
         };
-        let f = offset.unwrap_or_else(|| u.launch(2));
         let h = beam.0 + (beam.1 - beam.0) * f;
         let o = [
             h * e_perp[0] - self.r_start * dhat[0],
             h * e_perp[1] - self.r_start * dhat[1],
         ];
-        let z = self.cuticle.map_or(0.0, |c| c.0 * u.launch(3));
+        let z = self.cuticle.zip(z).map_or(0.0, |(c, uz)| c.0 * uz);
         let ray = Ray {
             p: [o[0], o[1], z],
             dir: d,
