@@ -217,8 +217,11 @@ fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
         photons += stored * sections * per_direction as f64;
         let nch = (e.variants.len() * st.channels_per_variant()) as f64;
         let per_slice = nch * grid_bins * 8.0;
-        let unit =
-            crate::fiber::slices::unit_len(e.stored_directions) as f64 * sections * per_slice;
+        // A unit of groups sharing their photons may end up to a group past `unit_len`.
+        let unit_dirs = crate::fiber::slices::unit_len(e.stored_directions)
+            + e.estimators.share_theta.max(1) as usize
+            - 1;
+        let unit = unit_dirs as f64 * sections * per_slice;
         let tables = stored
             * (sections + f64::from(u8::from(sections > 1.0)))
             * nch

@@ -144,7 +144,8 @@ struct Tallies {
     /// Σ over directions of section 0's thesis noise, and the directions at their target.
     thesis_noise: f64,
     at_target: usize,
-    /// Photons per stored direction, in stored order.
+    /// Photons per stored direction, in the order the units are written (only their
+    /// distribution is reported).
     photons: Vec<u64>,
     /// Per variant × channel: the smallest and largest stored albedo over every table.
     albedo: Vec<(f64, f64)>,

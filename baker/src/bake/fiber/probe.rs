@@ -53,7 +53,10 @@ pub fn trace_direction(
         typical_path_um(fiber),
     );
     // The θ rows of the direction's block ([`super::setup::EntrySetup::share_group`]).
-    let k = st.share_theta.max(1) as usize;
+    let k = match crate::fiber::tracer::shared::shares(fiber) {
+        true => st.share_theta.max(1) as usize,
+        false => 1,
+    };
     let res = st.res_deg.to_radians();
     let it = (((inc.theta_rad + 0.5 * std::f64::consts::PI) / res).floor() as usize)
         .min(grid.n_theta - 1);
