@@ -188,15 +188,7 @@ impl EntryBake<'_> {
         let r = runner.unit_deferred(&id, key, Some(self.first_unit + u), photons, || {
             // The unit's groups of directions sharing their photons (each direction alone
             // without `share_theta`), traced in parallel, each section in turn.
-            let mut groups: Vec<Vec<usize>> = Vec::new();
-            let mut placed = std::collections::BTreeSet::new();
-            for &i in chunk {
-                if placed.insert(i) {
-                    let g = s.share_group(i, st.share_theta as usize);
-                    placed.extend(g.iter().copied());
-                    groups.push(g);
-                }
-            }
+            let groups = s.groups(chunk.iter().copied(), st.share_theta as usize);
             let traced = groups
                 .par_iter()
                 .map(|g| {

@@ -79,16 +79,9 @@ impl EntrySetup {
             let all: Vec<usize> = (0..n).collect();
             return all.chunks(len).map(<[usize]>::to_vec).collect();
         }
-        let mut placed = vec![false; n];
         let (mut units, mut unit) = (Vec::new(), Vec::new());
-        for i in 0..n {
-            if placed[i] {
-                continue;
-            }
-            for m in self.share_group(i, k as usize) {
-                placed[m] = true;
-                unit.push(m);
-            }
+        for g in self.groups(0..n, k as usize) {
+            unit.extend(g);
             if unit.len() >= len {
                 unit.sort_unstable();
                 units.push(std::mem::take(&mut unit));
@@ -99,6 +92,21 @@ impl EntrySetup {
             units.push(unit);
         }
         units
+    }
+
+    /// The groups ([`EntrySetup::share_group`] under `share_theta` = `k`) of the stored
+    /// directions `dirs`, each once, in the order of the first of `dirs` in each.
+    pub fn groups(&self, dirs: impl IntoIterator<Item = usize>, k: usize) -> Vec<Vec<usize>> {
+        let mut placed = vec![false; self.stored.len()];
+        let mut out = Vec::new();
+        for i in dirs {
+            if !placed[i] {
+                let g = self.share_group(i, k);
+                g.iter().for_each(|&m| placed[m] = true);
+                out.push(g);
+            }
+        }
+        out
     }
 
     /// The stored incoming directions' bin centres, (θi, φi) in degrees.

@@ -132,18 +132,12 @@ pub fn measure(
             v
         }
     };
-    let mut done = vec![false; n];
     let (mut secs, mut photons, mut noise, mut thesis, mut capped) = (0.0, 0.0, 0.0, 0.0, 0);
     let mut sample = Sample::new(&s, &variant.name, &st, storage);
     // With `share_theta`, each measured direction's whole group (a group's photons serve
     // all of its directions, so its time is theirs together).
     let mut measured = 0;
-    for i in starts {
-        if done[i] {
-            continue;
-        }
-        let members = s.share_group(i, st.share_theta as usize);
-        members.iter().for_each(|&m| done[m] = true);
+    for members in s.groups(starts, st.share_theta as usize) {
         let bins: Vec<usize> = members.iter().map(|&m| s.stored[m]).collect();
         let incs: Vec<_> = bins
             .iter()
