@@ -513,22 +513,16 @@ fn issue18_a_fiber_can_choose_its_own_estimators() {
     );
     // `fiber trace` traces the entry with its own estimators.
     let spec = tmp.path().join("own.yaml");
-    let o = common::baker_in(
-        tmp.path(),
-        &[
-            "fiber",
-            "trace",
-            spec.to_str().unwrap(),
-            "--entry",
-            "silk",
-            "--theta-i",
-            "-30",
-            "--json",
-        ],
-    );
-    assert!(o.status.success(), "{}", common::stderr(&o));
-    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let s = j.to_string();
+    let trace = |extra: &[&str]| -> String {
+        let mut args = vec!["fiber", "trace", spec.to_str().unwrap()];
+        args.extend(["--entry", "silk", "--theta-i", "-30", "--json"]);
+        args.extend(extra);
+        let o = common::baker_in(tmp.path(), &args);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        j.to_string()
+    };
+    let s = trace(&[]);
     assert!(
         s.contains("\"expected_exits\":\"all\"") && s.contains("\"split\":2"),
         "{s}"
@@ -554,6 +548,33 @@ fn issue18_a_fiber_can_choose_its_own_estimators() {
     ] {
         assert!(e.contains(want), "missing {want:?} in:\n{e}");
     }
+    // Events met from inside are drawn at least `split` times: an exit_draws below the
+    // split, written in the fiber's block or inherited from `bake:`, is traced as the split,
+    // and the manifest says so.
+    let raised = format!(
+        "{bake}, exit_draws: 2}}\n{}",
+        fibers(", estimators: {split: 4}")
+    )
+    .replace(
+        "type: wool, ",
+        "type: wool, estimators: {split: 8, exit_draws: 3}, ",
+    );
+    let d = common::bake_spec(tmp.path(), "raised", &raised, 2);
+    let m = manifest(&d);
+    let draws = |i: usize| {
+        (
+            m["entries"][i]["split"].clone(),
+            m["entries"][i]["exit_draws"].clone(),
+        )
+    };
+    assert_eq!(draws(0), (json!(4), json!(4)));
+    assert_eq!(draws(1), (json!(8), json!(8)));
+    // So does `fiber trace` with its overrides.
+    let s = trace(&["--split", "8", "--exit-draws", "4"]);
+    assert!(
+        s.contains("\"exit_draws\":8") && s.contains("\"split\":8"),
+        "{s}"
+    );
 }
 
 /// `share_theta` in a bake: the tables are the same bytes for 1 and 2 threads, every stored

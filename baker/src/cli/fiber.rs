@@ -177,6 +177,14 @@ pub fn run(c: FiberCommand) -> anyhow::Result<()> {
     }
 }
 
+/// `--split` and `--exit-draws` over the spec's `st`, as a spec's block takes them
+/// (`spec::fiber::settings`): events met from inside are drawn at least `split` times, so an
+/// exit draw count below the split becomes the split (what is traced, and reported).
+fn draws(split: Option<u32>, exit_draws: Option<u32>, st: &BakeSettings) -> (u32, u32) {
+    let s = split.unwrap_or(st.split);
+    (s, exit_draws.unwrap_or(st.exit_draws).max(s))
+}
+
 /// A short label of an estimator: `split:exit_draws`, then `+ev` (inside exits scored in
 /// expectation) or `+ev+R` (and the first reflection), then `+sobol`, then `+θk` (k
 /// directions sharing their photons).
@@ -300,9 +308,10 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
         "smaller"
     )?;
     for (i, (e, st, storage)) in entries.iter().enumerate() {
+        let (split, exit_draws) = draws(a.split, a.exit_draws, st);
         let st = BakeSettings {
-            split: a.split.unwrap_or(st.split),
-            exit_draws: a.exit_draws.unwrap_or(st.exit_draws),
+            split,
+            exit_draws,
             expected_exits: a.expected_exits.unwrap_or(st.expected_exits),
             sampling: a.sampling.unwrap_or(st.sampling),
             share_theta: a.share_theta.unwrap_or(st.share_theta),
@@ -573,12 +582,13 @@ fn targets_of(a: &TraceArgs) -> anyhow::Result<Vec<TraceTarget>> {
             .iter()
             .find(|(e, _, _)| &e.name == name)
             .expect("found");
+        let (split, exit_draws) = draws(a.split, a.exit_draws, bake);
         let mut st = BakeSettings {
             photons: a.photons.unwrap_or(bake.photons),
             res_deg: a.resolution_deg.unwrap_or(bake.res_deg),
             seed: a.seed.unwrap_or(bake.seed),
-            split: a.split.unwrap_or(bake.split),
-            exit_draws: a.exit_draws.unwrap_or(bake.exit_draws),
+            split,
+            exit_draws,
             expected_exits: a.expected_exits.unwrap_or(bake.expected_exits),
             sampling: a.sampling.unwrap_or(bake.sampling),
             share_theta: a.share_theta.unwrap_or(bake.share_theta),

@@ -15,6 +15,7 @@ use crate::bake::destination::Destination;
 use crate::bake::job::Job;
 use crate::fiber::slices::{self as bake, incident_of_bin, unit_len, BakeSettings, NoiseTarget};
 use crate::fiber::sweep::ChannelKind;
+use crate::fiber::tracer::shared::shares;
 use crate::math::rng::coordinate_seed;
 use crate::output::{atomic, hdf5 as h5out};
 use crate::pipeline::Computed;
@@ -330,7 +331,7 @@ pub fn bake_entry(
 fn announce(eb: &EntryBake) {
     let s = &eb.setup;
     eb.job.runner.events.say(format!(
-        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons{} (split {}, exit draws {}, expected exits {:?}, sampling {:?}, shared by {} θ rows), {} variant(s) × {} channel(s)",
+        "{}: {} section(s), symmetry {}, {} of {} incoming directions × {} photons{} (split {}, exit draws {}, expected exits {:?}, sampling {:?}{}), {} variant(s) × {} channel(s)",
         eb.e.name,
         s.fibers.len(),
         s.sym.describe(),
@@ -353,7 +354,12 @@ fn announce(eb: &EntryBake) {
         eb.st.exit_draws,
         eb.st.expected_exits,
         eb.st.sampling,
-        eb.st.share_theta,
+        match eb.st.share_theta {
+            1 => String::new(),
+            k if s.fibers.iter().all(shares) => format!(", photons shared by {k} θ rows"),
+            _ => ", traced alone: sharing needs a rough boundary without cuticle scales"
+                .into(),
+        },
         s.variants.len(),
         s.channels.per_variant()
     ));

@@ -40,7 +40,7 @@ pub struct RawBake {
     pub split: Option<Spanned<f64>>,
     /// Draws per boundary event met from inside the fiber, so every exit lobe is sampled this
     /// many times per photon (a whole number; 1 = plain tracing). Never fewer than `split`:
-    /// a smaller value draws `split` times.
+    /// a smaller value draws `split` times (and the manifest records `split`).
     pub exit_draws: Option<Spanned<f64>>,
     /// Expected-value exit scoring: `none`; `inside`, where a path leaves through a rough
     /// boundary from inside (TT, TRT, …) its exit lobe is scored over the outgoing bins in
@@ -187,7 +187,7 @@ pub struct RawEstimators {
     /// tracing).
     pub split: Option<Spanned<f64>>,
     /// Draws per boundary event met from inside the fiber (a whole number; 1 = plain
-    /// tracing; never fewer than `split`: a smaller value draws `split` times).
+    /// tracing; never fewer than `split`: a smaller value draws `split` times, and is recorded so).
     pub exit_draws: Option<Spanned<f64>>,
     /// Expected-value exit scoring: `none`, `inside` or `all` (as `bake.expected_exits`).
     pub expected_exits: Option<Spanned<String>>,

@@ -224,18 +224,26 @@ impl FiberCx {
 
     /// The estimator fields of `bake:` or of a fiber's `estimators:` (named `{at}.split`, …),
     /// each absent or wrong one `d`'s.
+    ///
+    /// Events met from inside are drawn at least `split` times (the tracer's
+    /// [`crate::fiber::slices::BakeSettings::draws`]): an `exit_draws` below the block's
+    /// `split`, written or inherited, becomes `split` here, so that what the manifest and
+    /// the tables' metadata record is what is traced.
     fn estimator_fields(&mut self, at: &str, f: EstimatorFields, d: Estimators) -> Estimators {
         let field = |name: &str| format!("{at}.{name}");
         let (split, draws) = (d.split as u64, d.exit_draws as u64);
+        let split = self.count(&field("split"), f.split, SPLIT.lo, SPLIT.hi, split) as u32;
+        let exit_draws = self.count(
+            &field("exit_draws"),
+            f.exit_draws,
+            EXIT_DRAWS.lo,
+            EXIT_DRAWS.hi,
+            draws,
+        ) as u32;
         Estimators {
-            split: self.count(&field("split"), f.split, SPLIT.lo, SPLIT.hi, split) as u32,
-            exit_draws: self.count(
-                &field("exit_draws"),
-                f.exit_draws,
-                EXIT_DRAWS.lo,
-                EXIT_DRAWS.hi,
-                draws,
-            ) as u32,
+            split,
+            // Never fewer than `split` (the tracer's `BakeSettings::draws`), as traced.
+            exit_draws: exit_draws.max(split),
             expected_exits: self.opt_choice(
                 &field("expected_exits"),
                 f.expected_exits,
