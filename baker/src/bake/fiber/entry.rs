@@ -15,7 +15,6 @@ use crate::bake::destination::Destination;
 use crate::bake::job::Job;
 use crate::fiber::slices::{self as bake, incident_of_bin, unit_len, BakeSettings, NoiseTarget};
 use crate::fiber::sweep::ChannelKind;
-use crate::fiber::tracer::shared::shares;
 use crate::math::rng::coordinate_seed;
 use crate::output::{atomic, hdf5 as h5out};
 use crate::pipeline::Computed;
@@ -356,9 +355,7 @@ fn announce(eb: &EntryBake) {
         eb.st.sampling,
         match eb.st.share_theta {
             1 => String::new(),
-            k if s.fibers.iter().all(shares) => format!(", photons shared by {k} θ rows"),
-            _ => ", traced alone: sharing needs a rough boundary without cuticle scales"
-                .into(),
+            k => format!(", photons shared by {k} θ rows"),
         },
         s.variants.len(),
         s.channels.per_variant()

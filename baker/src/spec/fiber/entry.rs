@@ -65,9 +65,16 @@ pub struct FiberEntry {
 
 impl FiberEntry {
     /// The settings this fiber bakes with: `bake` (the spec's, with any command-line
-    /// overrides) with the fiber's own estimators.
+    /// overrides) with the fiber's own estimators. A fiber whose photons cannot be shared
+    /// across θi (cuticle scales or a smooth boundary,
+    /// [`crate::fiber::tracer::shared::shares`]) has `share_theta` 1: each direction is
+    /// traced alone, and the manifest and tables say so.
     pub fn settings(&self, bake: &BakeSettings) -> BakeSettings {
-        bake.with_estimators(self.estimators)
+        let mut st = bake.with_estimators(self.estimators);
+        if st.share_theta > 1 && !crate::fiber::tracer::shared::shares(&self.fiber()) {
+            st.share_theta = 1;
+        }
+        st
     }
 
     pub fn fiber(&self) -> Fiber {
