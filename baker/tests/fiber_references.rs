@@ -147,6 +147,44 @@ fibers:
     );
 }
 
+/// Every set's χ² p-value (p, χ², bins, label) above the Šidák level of family-wise `alpha`.
+fn sets_pass_sidak<L: std::fmt::Display>(sets: &[(f64, f64, usize, L)], alpha: f64) {
+    let p_min = 1.0 - (1.0 - alpha).powf(1.0 / sets.len() as f64);
+    for (p, chi2, n, label) in sets {
+        eprintln!("{label}: χ² = {chi2:.1} over {n} bins, p = {p:.3}");
+        assert!(
+            *p > p_min,
+            "{label}: χ² = {chi2:.1} over {n} bins, p = {p:.2e} < {p_min:.2e}"
+        );
+    }
+}
+
+/// The (z, label) of largest |z|.
+fn largest_z<L>(zs: &[(f64, L)]) -> &(f64, L) {
+    zs.iter()
+        .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
+        .unwrap()
+}
+
+/// Wavelengths of [`undyed_and_dyed`], nm.
+const LAMBDA_NM: [f64; 3] = [450.0, 550.0, 650.0];
+
+/// The channels both estimator tests score: an undyed and a dyed variant at 450, 550 and
+/// 650 nm (spectral; the undyed one is the white furnace).
+fn undyed_and_dyed() -> Channels {
+    let variants = [
+        Variant {
+            name: "undyed".into(),
+            mua_per_um: vec![0.0; 3],
+        },
+        Variant {
+            name: "dyed".into(),
+            mua_per_um: vec![0.01, 0.03, 0.002],
+        },
+    ];
+    Channels::new(&variants, &LAMBDA_NM, ChannelKind::Spectral, 40.0)
+}
+
 fn rough(section_shape: Shape, diameter_um: f64, eta: f64, beta_deg: f64, seed: u64) -> Fiber {
     Fiber {
         section: generate(section_shape, diameter_um, seed, 0).unwrap(),
@@ -186,18 +224,7 @@ fn density(r: &SliceResult, per_variant: usize, bins: usize) -> Vec<f64> {
 fn estimators_agree_with_plain_tracing() {
     use statrs::distribution::ChiSquared;
     let grid = AngularGrid::new(10.0).unwrap();
-    let lambda = [450.0, 550.0, 650.0];
-    let variants = [
-        Variant {
-            name: "undyed".into(),
-            mua_per_um: vec![0.0; 3],
-        },
-        Variant {
-            name: "dyed".into(),
-            mua_per_um: vec![0.01, 0.03, 0.002],
-        },
-    ];
-    let channels = Channels::new(&variants, &lambda, ChannelKind::Spectral, 40.0);
+    let channels = undyed_and_dyed();
     let mut wool = rough(Shape::Wool, 30.0, 1.5475, 5.0, 1);
     wool.cuticle = Some(baker::fiber::Cuticle {
         length_um: 10.0,
@@ -255,7 +282,7 @@ fn estimators_agree_with_plain_tracing() {
                     sampling,
                     batch: 512,
                     channels: ChannelKind::Spectral,
-                    lambda_nm: lambda.to_vec(),
+                    lambda_nm: LAMBDA_NM.to_vec(),
                     ..BakeSettings::default()
                 };
                 trace_slice(fiber, inc, &grid, &channels, &s, seed, &Cancel::NEVER).unwrap()
@@ -314,19 +341,9 @@ fn estimators_agree_with_plain_tracing() {
         }
     }
     let alpha: f64 = 1e-3;
-    let p_min = 1.0 - (1.0 - alpha).powf(1.0 / sets.len() as f64);
-    for (p, chi2, n, label) in &sets {
-        eprintln!("{label}: χ² = {chi2:.1} over {n} bins, p = {p:.3}");
-        assert!(
-            *p > p_min,
-            "{label}: χ² = {chi2:.1} over {n} bins, p = {p:.2e} < {p_min:.2e}"
-        );
-    }
+    sets_pass_sidak(&sets, alpha);
     let z_max = sidak_z(albedo_z.len(), alpha);
-    let worst = albedo_z
-        .iter()
-        .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
-        .unwrap();
+    let worst = largest_z(&albedo_z);
     assert!(
         worst.0.abs() < z_max,
         "{}: z = {:.2} (threshold {z_max:.2} over {})",
@@ -493,18 +510,7 @@ fn shared_photons_agree_with_plain_tracing() {
     use baker::fiber::slices::{trace_group, ExpectedExits as Ev, NoiseTarget};
     use statrs::distribution::ChiSquared;
     let grid = AngularGrid::new(5.0).unwrap();
-    let lambda = [450.0, 550.0, 650.0];
-    let variants = [
-        Variant {
-            name: "undyed".into(),
-            mua_per_um: vec![0.0; 3],
-        },
-        Variant {
-            name: "dyed".into(),
-            mua_per_um: vec![0.01, 0.03, 0.002],
-        },
-    ];
-    let channels = Channels::new(&variants, &lambda, ChannelKind::Spectral, 40.0);
+    let channels = undyed_and_dyed();
     let fibers = [
         ("silk", rough(Shape::Silk, 8.0, 1.5645, 6.5, 2)),
         ("cotton", rough(Shape::CottonRaw, 15.0, 1.555, 15.5, 1)),
@@ -533,7 +539,7 @@ fn shared_photons_agree_with_plain_tracing() {
         share_theta: share,
         batch: 512,
         channels: ChannelKind::Spectral,
-        lambda_nm: lambda.to_vec(),
+        lambda_nm: LAMBDA_NM.to_vec(),
         ..BakeSettings::default()
     };
     let (mut sets, mut albedo_z, mut all_z2) = (Vec::new(), Vec::new(), (0.0, 0usize));
@@ -612,19 +618,9 @@ fn shared_photons_agree_with_plain_tracing() {
         "no group finished its directions at different photon counts"
     );
     let alpha: f64 = 1e-3;
-    let p_min = 1.0 - (1.0 - alpha).powf(1.0 / sets.len() as f64);
-    for (p, chi2, n, label) in &sets {
-        eprintln!("{label}: χ² = {chi2:.1} over {n} bins, p = {p:.3}");
-        assert!(
-            *p > p_min,
-            "{label}: χ² = {chi2:.1} over {n} bins, p = {p:.2e} < {p_min:.2e}"
-        );
-    }
+    sets_pass_sidak(&sets, alpha);
     let z_max = sidak_z(albedo_z.len(), alpha);
-    let worst = albedo_z
-        .iter()
-        .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
-        .unwrap();
+    let worst = largest_z(&albedo_z);
     let mean_z2 = all_z2.0 / all_z2.1 as f64;
     eprintln!(
         "shared vs plain: {} sets, {} bins, mean z² {mean_z2:.3}; albedo max |z| {:.2} (threshold {z_max:.2}) over {}",
