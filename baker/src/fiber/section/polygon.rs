@@ -576,9 +576,46 @@ mod tests {
         }
     }
 
+    /// The nearest crossing by testing every edge (`skip` aside): edge and ray parameter.
+    fn brute_force(p: &Polygon, o: [f64; 2], d: [f64; 2], skip: Option<u32>) -> Option<(u32, f64)> {
+        let mut brute: Option<(u32, f64)> = None;
+        for (i, e) in p.edges.iter().enumerate() {
+            let den = e.n[0] * d[0] + e.n[1] * d[1];
+            let t = (e.c - e.n[0] * o[0] - e.n[1] * o[1]) / den;
+            let h = [o[0] + t * d[0] - e.a[0], o[1] + t * d[1] - e.a[1]];
+            let s = (h[0] * e.ab[0] + h[1] * e.ab[1]) * e.inv_len2;
+            if Some(i as u32) != skip
+                && t > 0.0
+                && (0.0..=1.0).contains(&s)
+                && brute.is_none_or(|b| t < b.1)
+            {
+                brute = Some((i as u32, t));
+            }
+        }
+        brute
+    }
+
+    /// The grid query finds the edge brute force finds, with the same ray parameter bit for
+    /// bit: from random points in any direction, and, as the tracer asks, from a point on an
+    /// edge (skipped) into the material or out of it, on a polygon with a hole and on a
+    /// generated raw cotton section (thin walls around a slit lumen).
     #[test]
     fn grid_query_equals_brute_force() {
-        let p = Polygon::new(ngon(300, 5.0), vec![ngon(40, 1.5)]).unwrap();
+        let cotton = match super::super::generate::generate(
+            super::super::generate::Shape::CottonRaw,
+            12.0,
+            7,
+            0,
+        )
+        .unwrap()
+        {
+            super::super::Section::Polygon(p) => p,
+            _ => unreachable!(),
+        };
+        let polygons = [
+            Polygon::new(ngon(300, 5.0), vec![ngon(40, 1.5)]).unwrap(),
+            cotton,
+        ];
         let mut s = 12345u64;
         let mut rnd = || {
             s = s
@@ -586,23 +623,37 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
-        for _ in 0..2000 {
-            let o = [rnd() * 14.0 - 7.0, rnd() * 14.0 - 7.0];
-            let a = rnd() * std::f64::consts::TAU;
-            let d = [a.cos(), a.sin()];
-            let fast = p.intersect(o, d, f64::INFINITY, None).map(|h| (h.id, h.t));
-            let mut brute: Option<(u32, f64)> = None;
-            for (i, e) in p.edges.iter().enumerate() {
-                let den = e.n[0] * d[0] + e.n[1] * d[1];
-                let t = (e.c - e.n[0] * o[0] - e.n[1] * o[1]) / den;
-                let h = [o[0] + t * d[0] - e.a[0], o[1] + t * d[1] - e.a[1]];
-                let s = (h[0] * e.ab[0] + h[1] * e.ab[1]) * e.inv_len2;
-                if t > 0.0 && (0.0..=1.0).contains(&s) && brute.is_none_or(|b| t < b.1) {
-                    brute = Some((i as u32, t));
+        let (mut from_edges, mut hits) = (0, 0);
+        for p in &polygons {
+            for i in 0..4000 {
+                let a = rnd() * std::f64::consts::TAU;
+                let d = [a.cos(), a.sin()];
+                let (o, skip) = if i % 2 == 0 {
+                    ([rnd() * 14.0 - 7.0, rnd() * 14.0 - 7.0], None)
+                } else {
+                    // A point on a random edge.
+                    let id = (rnd() * p.edges.len() as f64) as u32;
+                    let (e, f) = (&p.edges[id as usize], rnd());
+                    from_edges += 1;
+                    ([e.a[0] + f * e.ab[0], e.a[1] + f * e.ab[1]], Some(id))
+                };
+                let want = brute_force(p, o, d, skip);
+                hits += want.is_some() as u32;
+                let got = p.intersect(o, d, f64::INFINITY, skip);
+                assert_eq!(
+                    got.map(|h| (h.id, h.t.to_bits())),
+                    want.map(|b| (b.0, b.1.to_bits())),
+                    "o={o:?} d={d:?} skip={skip:?}"
+                );
+                // A shorter ray finds the same edge when it reaches it, none otherwise.
+                if let Some((id, t)) = want {
+                    let t_max = t * (0.5 + rnd());
+                    let short = p.intersect(o, d, t_max, skip).map(|h| h.id);
+                    assert_eq!(short, (t <= t_max).then_some(id));
                 }
             }
-            assert_eq!(fast.map(|f| f.0), brute.map(|b| b.0), "o={o:?} d={d:?}");
         }
+        assert!(from_edges > 3000 && hits > 4000, "{from_edges} {hits}");
     }
 
     #[test]
