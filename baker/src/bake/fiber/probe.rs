@@ -53,7 +53,7 @@ pub fn trace_direction(
         typical_path_um(fiber),
     );
     // The θ rows of the direction's block ([`super::setup::EntrySetup::share_group`]).
-    let k = match crate::fiber::tracer::shared::shares(fiber) {
+    let k = match crate::fiber::tracer::shared::shares(&fiber.surface, fiber.cuticle.as_ref()) {
         true => st.share_theta.max(1) as usize,
         false => 1,
     };

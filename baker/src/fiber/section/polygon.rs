@@ -601,16 +601,11 @@ mod tests {
     /// generated raw cotton section (thin walls around a slit lumen).
     #[test]
     fn grid_query_equals_brute_force() {
-        let cotton = match super::super::generate::generate(
-            super::super::generate::Shape::CottonRaw,
-            12.0,
-            7,
-            0,
-        )
-        .unwrap()
-        {
-            super::super::Section::Polygon(p) => p,
-            _ => unreachable!(),
+        use crate::fiber::section::generate::{generate, Shape};
+        let crate::fiber::section::Section::Polygon(cotton) =
+            generate(Shape::CottonRaw, 12.0, 7, 0).unwrap()
+        else {
+            unreachable!("a raw cotton section is a polygon")
         };
         let polygons = [
             Polygon::new(ngon(300, 5.0), vec![ngon(40, 1.5)]).unwrap(),

@@ -39,10 +39,10 @@ use crate::math::sampler::PathSampler;
 /// The most incoming directions one photon serves.
 pub const MAX_SHARED: usize = 8;
 
-/// Whether `fiber`'s directions can share photons at all: straight (no cuticle scales) and
+/// Whether a fiber's directions can share photons at all: straight (no cuticle scales) and
 /// rough.
-pub fn shares(fiber: &crate::fiber::Fiber) -> bool {
-    fiber.cuticle.is_none() && fiber.surface.alpha > 0.0
+pub fn shares(surface: &crate::fiber::Surface, cuticle: Option<&crate::fiber::Cuticle>) -> bool {
+    cuticle.is_none() && surface.alpha > 0.0
 }
 
 /// Where a shared photon's branches are scored: into every slice of its group, each with its

@@ -71,7 +71,8 @@ impl FiberEntry {
     /// traced alone, and the manifest and tables say so.
     pub fn settings(&self, bake: &BakeSettings) -> BakeSettings {
         let mut st = bake.with_estimators(self.estimators);
-        if st.share_theta > 1 && !crate::fiber::tracer::shared::shares(&self.fiber()) {
+        let shares = crate::fiber::tracer::shared::shares(&self.surface(), self.cuticle.as_ref());
+        if st.share_theta > 1 && !shares {
             st.share_theta = 1;
         }
         st
@@ -103,11 +104,16 @@ impl FiberEntry {
     pub fn fiber_with(&self, section: Section) -> Fiber {
         Fiber {
             section,
-            surface: Surface {
-                eta: self.eta,
-                alpha: self.beta_deg.to_radians().tan(),
-            },
+            surface: self.surface(),
             cuticle: self.cuticle,
+        }
+    }
+
+    /// The fiber's boundary: refractive index and Beckmann slope α = tan β.
+    pub fn surface(&self) -> Surface {
+        Surface {
+            eta: self.eta,
+            alpha: self.beta_deg.to_radians().tan(),
         }
     }
 
