@@ -498,17 +498,21 @@ fn symmetry_reduced_tables_match_full_traces() {
 /// Photons shared by neighbouring incoming directions (`share_theta`, issue 18) against plain
 /// tracing of each direction: rough silk, cotton and wool (without cuticle scales: with them
 /// each direction is traced alone) and a circle of β = 40° near grazing incidence (θi from
-/// −70°, where V-cavity entries through a second facet are common), 5° bins, a group of 4 θ rows at one φ (lobes of 6.5–15.5°
-/// overlap partly across 5°, so the multiple-importance weights are neither 0 nor 1), and
-/// three estimators: plain draws, 16:16 with every lobe in expectation, and the same under a
-/// target that some of the group reach before the others (the rest go on alone: the
-/// test asserts it happened). Per (fiber, estimator, direction) the density's χ² against
+/// −70°, where V-cavity entries through a second facet are common), 5° bins, a column of 6 θ
+/// rows at one φ shared by sliding windows of 4 (lobes of 6.5–15.5° overlap partly across 5°,
+/// so the multiple-importance weights are neither 0 nor 1; windows cut short at both ends),
+/// and three estimators: plain draws, 16:16 with every lobe in expectation, and the same under
+/// a target that some of the column reach before the others (the rest go on without them:
+/// the test asserts it happened). Per (fiber, estimator, direction) the density's χ² against
 /// plain tracing (Šidák-corrected over the sets), every channel's albedo (undyed and dyed)
 /// within a Šidák bound, the white furnace Λ = 1 within 4 SE, and the mean z² near 1.
 #[test]
 fn shared_photons_agree_with_plain_tracing() {
     use baker::fiber::slices::{trace_group, ExpectedExits as Ev, NoiseTarget};
     use statrs::distribution::ChiSquared;
+    // θ rows of the column, and the rows a window of photons serves.
+    const ROWS: usize = 6;
+    const WINDOW: u32 = 4;
     let grid = AngularGrid::new(5.0).unwrap();
     let channels = undyed_and_dyed();
     let fibers = [
@@ -546,7 +550,7 @@ fn shared_photons_agree_with_plain_tracing() {
     let mut dropped = false;
     for (f, (name, fiber)) in fibers.iter().enumerate() {
         let (it0, jp) = [(8usize, 7usize), (12, 30), (20, 51), (4, 3)][f];
-        let incs: Vec<_> = (it0..it0 + 4)
+        let incs: Vec<_> = (it0..it0 + ROWS)
             .map(|it| incident_of_bin(&grid, it, jp))
             .collect();
         let plain: Vec<SliceResult> = incs
@@ -567,11 +571,11 @@ fn shared_photons_agree_with_plain_tracing() {
             })
             .collect();
         for (e, &est) in estimators.iter().enumerate() {
-            let s = settings(est, 0, 4);
-            let seeds: Vec<u64> = (0..4).map(|k| 700 + 10 * e as u64 + k).collect();
+            let s = settings(est, 0, WINDOW);
+            let seeds: Vec<u64> = (0..ROWS as u64).map(|k| 700 + 10 * e as u64 + k).collect();
             let shared =
                 trace_group(fiber, &incs, &grid, &channels, &s, &seeds, &Cancel::NEVER).unwrap();
-            assert_eq!(shared.len(), 4);
+            assert_eq!(shared.len(), ROWS);
             let launched: Vec<u64> = shared.iter().map(|r| r.launched).collect();
             if est.3 {
                 dropped |= launched.iter().any(|&l| l != launched[0]);

@@ -583,8 +583,8 @@ fn issue18_a_fiber_can_choose_its_own_estimators() {
 /// unshared bake's (another estimator; `fiber_references` shows they estimate the same),
 /// every albedo is in (0, 1], a cuticled wool falls back to tracing alone (its
 /// tables are those of the unshared bake; its manifest entry and metadata say
-/// `share_theta` 1), and `fiber trace` traces the direction with its block. 10° bins,
-/// adaptive, so groups shrink as their directions reach the target.
+/// `share_theta` 1), and `fiber trace` traces the direction with the rows of its windows.
+/// 10° bins, adaptive, so windows shrink as their directions reach the target.
 #[test]
 fn issue18_shared_photons_bake_is_thread_independent_and_complete() {
     let tmp = tempfile::tempdir().unwrap();
@@ -630,7 +630,7 @@ fibers:
     let m = manifest(&a);
     assert_eq!(m["entries"][0]["share_theta"], json!(4));
     assert_eq!(m["entries"][1]["share_theta"], json!(1));
-    // `fiber trace` with the entry's settings: the direction traced with its block.
+    // `fiber trace` with the entry's settings: the direction traced with its windows' rows.
     let s = tmp.path().join("shared.yaml");
     let o = common::baker_in(
         tmp.path(),

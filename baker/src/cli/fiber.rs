@@ -127,7 +127,8 @@ pub struct TraceArgs {
     #[arg(long, requires = "specs", value_parser = sampling_arg)]
     pub sampling: Option<Sampling>,
     /// With a spec entry: override its `bake.share_theta` (directions sharing their photons,
-    /// 1–8; the direction is traced with the other θ rows of its block).
+    /// 1–8; the direction is traced with the k − 1 θ rows on either side, as its windows
+    /// in a bake hold it).
     #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=8))]
     pub share_theta: Option<u32>,
     /// Write the outgoing slice as a false-colour log PNG (like Table 8) to FILE.png; with
@@ -283,7 +284,7 @@ fn run_thesis_bench(a: FiberBenchArgs) -> anyhow::Result<()> {
     let mut s = String::new();
     writeln!(
         s,
-        "one cross-section at the thesis's noise (2° bins; per direction the noise 16 M plain photons give), {} threads; {} per entry measured (with `share_theta`, each with its group), scaled up",
+        "one cross-section at the thesis's noise (2° bins; per direction the noise 16 M plain photons give), {} threads; {} per entry measured (with `share_theta`, each with its whole φ column), scaled up",
         rayon::current_num_threads(),
         match a.columns {
             Some(c) => format!("every stored θ row of {c} φ column(s)"),

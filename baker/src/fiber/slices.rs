@@ -44,25 +44,27 @@
 //!   over thousands of bins, a statistic nearly independent of any one bin's value, so the
 //!   bias of a data-dependent stop is far below the noise.
 //! - **Photons shared across θi** (`share_theta: k`, [`trace_group`],
-//!   [`super::tracer::shared`]): the stored directions of one φ column in a block of k θ rows
-//!   trace one set of photons; the beams of one φi meet the fiber at the same points, so one
-//!   walk inside serves every direction whose entry lobe could have produced it, weighted by
-//!   multiple importance sampling (balance heuristic over the k entry densities). Each
-//!   direction stays unbiased; a direction that reaches its target leaves the group, the
-//!   others go on.
+//!   [`super::tracer::shared`]): the stored directions of one φ column are traced together,
+//!   each batch of photons shared by a window of k neighbouring θ rows, the windows sliding
+//!   one row at a time ([`Windows`]); the beams of one φi meet the fiber at the same points,
+//!   so one walk inside serves every direction of the window whose entry lobe could have
+//!   produced it, weighted by multiple importance sampling (balance heuristic over the
+//!   window's entry densities). Each batch is an unbiased estimate for every direction it
+//!   scores; a direction that reaches its target leaves its windows, the others go on.
 //!
 //! Standard errors come from the spread of independent batches (batch means), which is
 //! valid for split, stratified and adaptively stopped estimators alike, and for batches whose
 //! first-reflection share differs (independent, equal means: the spread's expectation is
 //! still the sum of their variances).
 
+use std::ops::Range;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 use super::scratch;
 use super::sweep::{ChannelKind, Channels};
-use super::tracer::shared::{SharedExits, MAX_SHARED};
+use super::tracer::shared::{SharedExits, Windows, MAX_SHARED};
 use super::tracer::{Draws, Exits, PhotonStats, Setup};
 use super::{Fiber, Incident};
 use crate::cancel::{Cancel, Cancelled};
@@ -394,22 +396,23 @@ pub fn trace_slice(
         seed,
     };
     let mut r = drive(
-        1,
+        Windows::new(1, 1),
         grid,
         channels,
         s,
         cancel,
         start,
-        |b, _, launches, apart| vec![job.trace_batch(b, launches[0], apart)],
+        |b, _, _, launches, apart| vec![job.trace_batch(b, launches[0], apart)],
     )?;
     Ok(r.pop().expect("one slice"))
 }
 
-/// Traces the incoming bins `incs` of one azimuth and neighbouring elevations with shared
-/// photons ([`super::tracer::shared`]), seeded by `seeds[0]`: one result per bin, in order,
-/// each as [`trace_slice`] gives it (the group's photons; its seconds shared equally). Bins
-/// that cannot share (one alone, a smooth or cuticled fiber, other azimuths) are traced alone
-/// with their own `seeds`.
+/// Traces the incoming bins `incs` of one azimuth and consecutive elevations (in order) with
+/// shared photons ([`super::tracer::shared`]): windows of `share_theta` of them
+/// ([`Windows`]) trace a batch each in turn, seeded by `seeds[0]`. One result per bin, in
+/// order, each as [`trace_slice`] gives it (the photons of the batches that scored it; the
+/// group's seconds shared equally). Bins that cannot share (one alone, a smooth or cuticled
+/// fiber, other azimuths, `share_theta` 1) are traced alone with their own `seeds`.
 pub fn trace_group(
     fiber: &Fiber,
     incs: &[Incident],
@@ -423,7 +426,7 @@ pub fn trace_group(
         .iter()
         .map(|&inc| setup_of(fiber, inc, grid, s))
         .collect();
-    if incs.len() < 2 || !Setup::can_share(&setups) {
+    if incs.len() < 2 || s.share_theta < 2 || !Setup::can_share(&setups) {
         return incs
             .iter()
             .zip(seeds)
@@ -440,13 +443,13 @@ pub fn trace_group(
         seed: seeds[0],
     };
     drive(
-        incs.len(),
+        Windows::new(incs.len(), s.share_theta as usize),
         grid,
         channels,
         s,
         cancel,
         start,
-        |b, active, launches, apart| job.trace_batch(b, active, launches, apart),
+        |b, members, active, launches, apart| job.trace_batch(b, members, active, launches, apart),
     )
 }
 
@@ -464,73 +467,100 @@ fn setup_of<'a>(
     )
 }
 
-/// The batches of `k` slices traced together: `batch(b, active, launches, apart)` traces
-/// batch `b` of the slices still `active` (one score each, in order; `launches[i]` of slice
-/// i's first-reflection pass, tallied apart when `apart`). A first pass, then, with a target,
-/// groups of batches until every slice reaches it or the cap; a slice that reaches it stops
-/// there, and the others go on without it (every batch is an unbiased estimate of each slice
-/// it scores, so the batch-means error of batches traced by different groups stays right:
-/// independent terms of one mean). The check sees the batches merged in order, so where the
-/// slices stop does not depend on the thread count.
+/// The batches of the `windows.n` slices traced together: `batch(b, members, active,
+/// launches, apart)` traces batch `b` for the slices `members` of window b mod
+/// `windows.count()` that are still `active` (one score each, in order; `launches[i]` of
+/// slice i's first-reflection pass, tallied apart when `apart`). Rounds of one batch per
+/// window give every slice `windows.k` batches. A first pass of rounds (each slice at least
+/// its first batches), then, with a target, groups of batches until every slice reaches it or
+/// the cap; a slice that reaches it stops there, the others go on without it, and a window
+/// left with none is skipped (every batch is an unbiased estimate of each slice it scores, so
+/// the batch-means error of batches traced by different windows stays right: independent
+/// terms of one mean). The check sees the batches merged in order, so where the slices stop
+/// does not depend on the thread count.
 fn drive(
-    k: usize,
+    windows: Windows,
     grid: &AngularGrid,
     channels: &Channels,
     s: &BakeSettings,
     cancel: &Cancel,
     start: Instant,
-    batch: impl Fn(u64, &[bool], &[u64], bool) -> Vec<BatchScore> + Sync,
+    batch: impl Fn(u64, Range<usize>, &[bool], &[u64], bool) -> Vec<BatchScore> + Sync,
 ) -> Result<Vec<SliceResult>, Cancelled> {
+    let (n, k, per_round) = (windows.n, windows.k as u64, windows.count() as u64);
     let first = s.batches_for(s.photons);
     let cap = match s.target {
         Some(_) => s.batches_for(s.max_photons).max(first),
         None => first,
     };
-    let mut sums: Vec<SliceSums> = (0..k)
+    // The first pass's batches, over whole rounds.
+    let first_end = first.div_ceil(k) * per_round;
+    let mut sums: Vec<SliceSums> = (0..n)
         .map(|_| SliceSums::new(grid, channels.len(), channels.per_variant()))
         .collect();
     let first_launches = match s.expected_exits.first_reflection() {
         true => (s.batch / FIRST_REFLECTION_SHARE).max(16),
         false => 0,
     };
-    let mut launches = vec![first_launches; k];
-    let mut active = vec![true; k];
+    let mut launches = vec![first_launches; n];
+    let mut active = vec![true; n];
     let mut b0 = 0;
-    while b0 < cap {
+    loop {
+        let in_first = b0 < first_end;
         let mut group = GROUP;
-        if b0 >= first {
+        if !in_first {
             let Some(t) = s.target else { break };
             let mut most = None;
             for (a, x) in active.iter_mut().zip(&sums) {
-                let more = x.batches_to(grid, t);
+                let more = match x.used < cap {
+                    true => x.batches_to(grid, t).map(|m| m.min(cap - x.used)),
+                    false => None,
+                };
                 *a = more.is_some();
                 most = most.max(more);
             }
             match most {
                 None => break,
-                Some(more) => group = more.min(GROUP),
+                // A slice gets k batches of every round.
+                Some(more) => group = more.saturating_mul(per_round).div_ceil(k).min(GROUP),
             }
         }
         cancel.check()?;
-        let b1 = (b0 + group).min(if b0 < first { first } else { cap });
+        // The next `group` batches of windows with an active slice (the first pass: up to
+        // its end).
+        let mut todo = Vec::new();
+        while todo.len() < group as usize && (!in_first || b0 < first_end) {
+            let w = windows.members((b0 % per_round) as usize);
+            if active[w.clone()].iter().any(|&a| a) {
+                todo.push((b0, w));
+            }
+            b0 += 1;
+        }
         // The first pass tallies its reflection pass apart, to set the share that follows.
-        let apart = b0 < first && s.target.is_some() && first_launches > 0;
-        let parts: Vec<Vec<BatchScore>> = (b0..b1)
+        let apart = in_first && s.target.is_some() && first_launches > 0;
+        let parts: Vec<(Range<usize>, Vec<BatchScore>)> = todo
             .into_par_iter()
-            .map(|b| batch(b, &active, &launches, apart))
+            .map(|(b, w)| {
+                let part = batch(b, w.clone(), &active, &launches, apart);
+                (w, part)
+            })
             .collect();
-        for part in parts {
-            let to = sums.iter_mut().zip(&active).filter(|(_, &a)| a);
-            for ((sum, _), p) in to.zip(part) {
-                sum.add(&p);
+        for (w, part) in parts {
+            let to = w.filter(|&i| active[i]);
+            for (i, p) in to.zip(part) {
+                sums[i].add(&p);
                 scratch::recycle(p.local);
                 scratch::recycle(p.reflection);
             }
         }
-        b0 = b1;
-        if b0 == first && apart {
-            for (l, sum) in launches.iter_mut().zip(&sums) {
-                *l = sum.reflection_launches(grid, s.batch, first_launches);
+        if in_first && b0 == first_end {
+            if apart {
+                for (l, sum) in launches.iter_mut().zip(&sums) {
+                    *l = sum.reflection_launches(grid, s.batch, first_launches);
+                }
+            }
+            if s.target.is_none() {
+                break;
             }
         }
     }
@@ -542,7 +572,7 @@ fn drive(
         })
         .collect();
     for r in &mut out {
-        r.seconds /= k as f64;
+        r.seconds /= n as f64;
     }
     Ok(out)
 }
@@ -656,29 +686,22 @@ struct GroupJob<'a> {
 }
 
 impl GroupJob<'_> {
-    /// Batch `b` of the `active` slices: `s.batch` photons they share
+    /// Batch `b` of the slices `members` still `active`: `s.batch` photons they share
     /// ([`Setup::photon_shared`]) at stratified entry offsets, then each one's own
     /// first-reflection pass (`launches[i]` launches, tallied apart as well when `apart`), as
     /// [`SliceJob::trace_batch`] does.
     fn trace_batch(
         &self,
         b: u64,
+        members: Range<usize>,
         active: &[bool],
         launches: &[u64],
         apart: bool,
     ) -> Vec<BatchScore> {
         let (grid, channels, s) = (self.grid, self.channels, self.s);
-        let setups: Vec<&Setup> = self
-            .setups
-            .iter()
-            .zip(active)
-            .filter_map(|(x, &a)| a.then_some(x))
-            .collect();
-        let launches: Vec<u64> = launches
-            .iter()
-            .zip(active)
-            .filter_map(|(&x, &a)| a.then_some(x))
-            .collect();
+        let members: Vec<usize> = members.filter(|&i| active[i]).collect();
+        let setups: Vec<&Setup> = members.iter().map(|&i| &self.setups[i]).collect();
+        let launches: Vec<u64> = members.iter().map(|&i| launches[i]).collect();
         let k = setups.len();
         let mut rng = batch_rng(self.seed, b);
         let mut sc = ChannelScore::shared(grid, channels, self.phi_i, k);
@@ -1186,6 +1209,88 @@ mod tests {
         // The photons' noise 4× the reflection's: s = √(1/16 / 16) = 1/16.
         let (g, s) = sums(0.4, 0.1, 8);
         assert_eq!(s.reflection_launches(&g, 4096, 256), 256);
+    }
+
+    /// A column shared by sliding windows ([`drive`]): each batch reaches exactly the
+    /// directions of its window still tracing, and a direction that reached its target gets
+    /// nothing more. Six directions, windows of four; each batch marks bin 0 with its
+    /// direction's number, the last direction's alternating (so it never reaches the target
+    /// and goes on alone to its cap, through windows whose other directions have left).
+    #[test]
+    fn window_batches_score_their_own_directions_until_each_leaves() {
+        use super::super::sweep::Variant;
+        let grid = AngularGrid::new(30.0).unwrap();
+        let variant = Variant {
+            name: "clear".into(),
+            mua_per_um: vec![0.0],
+        };
+        let channels = Channels::new(&[variant], &[550.0], ChannelKind::Spectral, 100.0);
+        let s = BakeSettings {
+            res_deg: 30.0,
+            batch: 64,
+            photons: 8 * 64,
+            target: Some(NoiseTarget::RelSe(1e-6)),
+            max_photons: 40 * 64,
+            ..BakeSettings::default()
+        };
+        let windows = Windows::new(6, 4);
+        let last = windows.n - 1;
+        let scored = std::sync::Mutex::new(vec![Vec::new(); windows.n]);
+        let r = drive(
+            windows,
+            &grid,
+            &channels,
+            &s,
+            &Cancel::NEVER,
+            Instant::now(),
+            |b, members, active, _, _| {
+                members
+                    .filter(|&i| active[i])
+                    .map(|i| {
+                        let v = match (i == last, b % 2) {
+                            (true, 0) => 10.0,
+                            (true, _) => 12.0,
+                            (false, _) => (i + 1) as f32,
+                        };
+                        scored.lock().unwrap()[i].push(b);
+                        let mut local = vec![0.0f32; grid.bins()];
+                        local[0] = v;
+                        BatchScore {
+                            total: vec![f64::from(v)],
+                            local,
+                            reflection: Vec::new(),
+                            hits: 1,
+                            lost: 0.0,
+                            g_sum: 1.0,
+                        }
+                    })
+                    .collect()
+            },
+        )
+        .unwrap();
+        let scored = scored.into_inner().unwrap();
+        // The first pass: two rounds of the nine windows, four batches of each per direction.
+        let first_end = 2 * windows.count() as u64;
+        for (i, r) in r.iter().enumerate() {
+            let mut b = scored[i].clone();
+            b.sort_unstable();
+            b.dedup();
+            assert_eq!(b.len(), scored[i].len(), "direction {i}: a batch twice");
+            for &x in &b {
+                let w = windows.members((x % windows.count() as u64) as usize);
+                assert!(w.contains(&i), "direction {i}: batch {x} of window {w:?}");
+            }
+            assert_eq!(r.launched, b.len() as u64 * s.batch, "direction {i}");
+            if i == last {
+                assert_eq!(r.launched, s.max_photons, "direction {i} to its cap");
+                assert!((10.0..=12.0).contains(&r.fraction[0]), "{}", r.fraction[0]);
+            } else {
+                // Its own marker alone, and no batch after the first pass.
+                assert_eq!(r.fraction[0], (i + 1) as f64, "direction {i}");
+                assert_eq!(b.len(), 8, "direction {i}");
+                assert!(b.iter().all(|&x| x < first_end), "direction {i}: {b:?}");
+            }
+        }
     }
 
     /// The batches still needed follow the error's 1/√batches decline.

@@ -28,6 +28,7 @@ use super::fiber::FiberSpec;
 use super::limits::BASE_BYTES;
 pub use super::limits::{skin_floor_bytes, GIB};
 use super::{SkinSpec, Spec};
+use crate::fiber::tracer::shared::MAX_SHARED;
 use crate::spec::skin::profiles::{BOOST_PILOT_MAX, MAX_SHARE, NOISE_PILOT_MAX};
 
 /// What the bake's flags change about its cost.
@@ -217,19 +218,23 @@ fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
         photons += stored * sections * per_direction as f64;
         let nch = (e.variants.len() * st.channels_per_variant()) as f64;
         let per_slice = nch * grid_bins * 8.0;
-        // A unit of groups sharing their photons may end up to a group past `unit_len`.
-        let unit_dirs = crate::fiber::slices::unit_len(e.stored_directions)
-            + e.estimators.share_theta.max(1) as usize
-            - 1;
+        // Directions sharing their photons are traced a φ column (at most every θ row) at a
+        // time, and a unit of columns may end up to a column past `unit_len`.
+        let column = match e.estimators.share_theta > 1 {
+            true => grid_bins / (360.0 / st.res_deg).round().max(1.0),
+            false => 1.0,
+        };
+        let unit_dirs = crate::fiber::slices::unit_len(e.stored_directions) + column as usize - 1;
         let unit = unit_dirs as f64 * sections * per_slice;
         let tables = stored
             * (sections + f64::from(u8::from(sections > 1.0)))
             * nch
             * grid_bins
             * value_bytes;
-        // Batches in flight hold every slice of a group sharing its photons.
-        let share = f64::from(e.estimators.share_theta.max(1));
-        let in_flight = 2.0 * t * 18.0 * per_slice * share;
+        // Batches in flight hold every slice of a window sharing its photons, and the
+        // columns being traced (one per thread) every slice's sums.
+        let share = f64::from(e.estimators.share_theta.clamp(1, MAX_SHARED as u32));
+        let in_flight = 2.0 * t * 18.0 * per_slice * share + t * column * per_slice;
         memory = memory.max(3.0 * unit + in_flight + 8192.0 * nch * 8.0 + tables);
     }
     Cost {

@@ -7,8 +7,9 @@
 //! Two differences from a bake, both deliberate: the beam comes from exactly (θi, φi), not
 //! averaged over the bin that contains it, and there is one channel (the fraction of the
 //! intercepted power at one wavelength) instead of the entry's dye sweep. Under
-//! `share_theta` the direction is traced with the directions a bake would share its photons
-//! with: (θi + k·res, φi) for the other θ rows of its block, its result the one returned.
+//! `share_theta` = k the direction is traced with the directions a bake would share its
+//! photons with: (θi + j·res, φi) for the k − 1 θ rows on either side (every window holding
+//! it, [`crate::fiber::tracer::shared::Windows`]), its result the one returned.
 
 use super::setup::typical_path_um;
 use crate::cancel::{Cancel, Cancelled};
@@ -52,7 +53,9 @@ pub fn trace_direction(
         ChannelKind::Spectral,
         typical_path_um(fiber),
     );
-    // The θ rows of the direction's block ([`super::setup::EntrySetup::share_group`]).
+    // The θ rows of every window holding the direction ([`crate::fiber::tracer::shared::Windows`]):
+    // the k − 1 rows on each side, so it lies at every place of a window as in a bake's
+    // column.
     let k = match crate::fiber::tracer::shared::shares(&fiber.surface, fiber.cuticle.as_ref()) {
         true => st.share_theta.max(1) as usize,
         false => 1,
@@ -60,8 +63,8 @@ pub fn trace_direction(
     let res = st.res_deg.to_radians();
     let it = (((inc.theta_rad + 0.5 * std::f64::consts::PI) / res).floor() as usize)
         .min(grid.n_theta - 1);
-    let it0 = it / k * k;
-    let incs: Vec<Incident> = (it0..(it0 + k).min(grid.n_theta))
+    let it0 = (it + 1).saturating_sub(k);
+    let incs: Vec<Incident> = (it0..(it + k).min(grid.n_theta))
         .map(|t| Incident {
             theta_rad: inc.theta_rad + (t as f64 - it as f64) * res,
             ..inc

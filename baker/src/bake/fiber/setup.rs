@@ -45,18 +45,18 @@ pub struct EntrySetup {
 }
 
 impl EntrySetup {
-    /// The stored directions (indices into `stored`, ascending) that trace one set of photons
+    /// The stored directions (indices into `stored`, ascending) that share their photons
     /// with stored direction `i` under `share_theta` = `k` ([`crate::fiber::tracer::shared`]):
-    /// the stored bins of its φ column whose θ rows fall in its block of `k` rows (rows
-    /// [⌊it/k⌋·k, ⌊it/k⌋·k + k)). A function of the grid and the symmetries alone, so every
-    /// unit and shard forms the same groups.
+    /// the stored bins of its φ column, in θ order, over which windows of `k` rows slide
+    /// ([`crate::fiber::tracer::shared::Windows`]); `[i]` alone for `k` ≤ 1. A function of the
+    /// grid and the symmetries alone, so every unit and shard forms the same groups.
     pub fn share_group(&self, i: usize, k: usize) -> Vec<usize> {
+        if k <= 1 {
+            return vec![i];
+        }
         let g = &self.grid;
-        let b = self.stored[i];
-        let (it, jp) = (b / g.n_phi, b % g.n_phi);
-        let k = k.max(1);
-        let it0 = it / k * k;
-        (it0..(it0 + k).min(g.n_theta))
+        let jp = self.stored[i] % g.n_phi;
+        (0..g.n_theta)
             .filter_map(|t| {
                 let x = t * g.n_phi + jp;
                 let s = (self.map[x] & !(FLIP_THETA | FLIP_DPHI)) as usize;
@@ -69,7 +69,7 @@ impl EntrySetup {
     /// into `stored`, ascending). Without sharing, consecutive runs of
     /// [`crate::fiber::slices::unit_len`]; with it, whole groups ([`EntrySetup::share_group`],
     /// in the order of their first direction) gathered until a unit holds that many, so a
-    /// unit's directions are a block of θ rows over a run of φ columns. A function of the grid
+    /// unit's directions are a run of whole φ columns. A function of the grid
     /// and the symmetries alone (the units, their ids and keys are the same on every machine
     /// and in every shard).
     pub fn units(&self, k: u32) -> Vec<Vec<usize>> {
