@@ -10,8 +10,9 @@ use crate::error::UsageError;
 use crate::fiber::section::generate::{generate, Shape};
 use crate::fiber::section::mask::{from_mask, MaskOptions};
 use crate::fiber::slices::{BakeSettings, ExpectedExits, Sampling};
+use crate::fiber::tracer::shared::MAX_SHARED;
 use crate::fiber::{trace, AngularGrid, Cuticle, Fiber, Incident, Section, Surface, TraceOptions};
-use crate::spec::fiber::{FiberEntry, TableStorage};
+use crate::spec::fiber::{FiberEntry, TableStorage, MAX_EXIT_DRAWS, MAX_SPLIT};
 
 #[derive(Debug, Subcommand)]
 pub enum FiberCommand {
@@ -62,10 +63,10 @@ pub struct FiberBenchArgs {
     #[arg(long, requires = "thesis")]
     pub dyed: bool,
     /// With --thesis: override the spec's `bake.split` (draws per event met from outside).
-    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SPLIT)))]
     pub split: Option<u32>,
     /// With --thesis: override the spec's `bake.exit_draws` (draws per event met from inside).
-    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=256))]
+    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_EXIT_DRAWS)))]
     pub exit_draws: Option<u32>,
     /// With --thesis: override the spec's `bake.expected_exits` (none, inside or all).
     #[arg(long, requires = "thesis", value_parser = expected_exits_arg)]
@@ -75,7 +76,7 @@ pub struct FiberBenchArgs {
     pub sampling: Option<Sampling>,
     /// With --thesis: override the spec's `bake.share_theta` (incoming directions sharing
     /// their photons, 1–8).
-    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=8))]
+    #[arg(long, requires = "thesis", value_parser = clap::value_parser!(u32).range(1..=MAX_SHARED as i64))]
     pub share_theta: Option<u32>,
     /// Write the table to FILE, atomically, instead of standard output.
     #[arg(short = 'o', long = "out", value_name = "FILE")]
@@ -115,10 +116,10 @@ pub struct TraceArgs {
     #[arg(long)]
     pub resolution_deg: Option<f64>,
     /// With a spec entry: override its `bake.split` (draws per event met from outside).
-    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=64))]
+    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SPLIT)))]
     pub split: Option<u32>,
     /// With a spec entry: override its `bake.exit_draws` (draws per event met from inside).
-    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=256))]
+    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_EXIT_DRAWS)))]
     pub exit_draws: Option<u32>,
     /// With a spec entry: override its `bake.expected_exits` (none, inside or all).
     #[arg(long, requires = "specs", value_parser = expected_exits_arg)]
@@ -129,7 +130,7 @@ pub struct TraceArgs {
     /// With a spec entry: override its `bake.share_theta` (directions sharing their photons,
     /// 1–8; the direction is traced with the k − 1 θ rows on either side, as its windows
     /// in a bake hold it).
-    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=8))]
+    #[arg(long, requires = "specs", value_parser = clap::value_parser!(u32).range(1..=MAX_SHARED as i64))]
     pub share_theta: Option<u32>,
     /// Write the outgoing slice as a false-colour log PNG (like Table 8) to FILE.png; with
     /// several --entry, FILE is a folder and each entry gets `<entry>.png` in it.

@@ -33,7 +33,9 @@ pub use entry::{FiberEntry, SectionSource, SymmetryMode};
 use raw::RawFiberSpec;
 pub(super) use schema::refine as refine_schema;
 pub use section::MEASURED_SIZE_FACTOR;
-pub use settings::{choice_of, TableStorage, ZstdLevel, EXPECTED_EXITS, SAMPLINGS};
+pub use settings::{
+    choice_of, TableStorage, ZstdLevel, EXPECTED_EXITS, MAX_EXIT_DRAWS, MAX_SPLIT, SAMPLINGS,
+};
 pub use surface::MAX_BETA_DEG;
 
 /// A validated fiber spec.

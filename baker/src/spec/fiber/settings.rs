@@ -6,6 +6,7 @@ use super::raw::{RawBake, RawEstimators, RawLambda};
 use super::FiberCx;
 use crate::fiber::slices::{BakeSettings, Estimators, ExpectedExits, NoiseTarget, Sampling};
 use crate::fiber::sweep::ChannelKind;
+use crate::fiber::tracer::shared::MAX_SHARED;
 use crate::spec::check::{loc, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
 use crate::spec::skin::raw::Token;
@@ -18,13 +19,16 @@ pub(in crate::spec) const RESOLUTION_DEG: Bounds = Bounds::closed(0.25, 30.0);
 pub(in crate::spec) const PHOTONS_PER_DIRECTION: Bounds = Bounds::whole(1.0, 1e12);
 /// `bake.seed`: any whole number an f64 holds exactly (up to 2^53).
 pub(in crate::spec) const SEED: Bounds = Bounds::whole(0.0, 9_007_199_254_740_992.0);
+/// The most draws per boundary event of the main path (`bake.split`, `--split`).
+pub const MAX_SPLIT: u32 = 64;
+/// The most draws per boundary event met from inside (`bake.exit_draws`, `--exit-draws`).
+pub const MAX_EXIT_DRAWS: u32 = 256;
 /// `bake.split`: draws per boundary event of the main path.
-pub(in crate::spec) const SPLIT: Bounds = Bounds::whole(1.0, 64.0);
+pub(in crate::spec) const SPLIT: Bounds = Bounds::whole(1.0, MAX_SPLIT as f64);
 /// `bake.exit_draws`: draws per boundary event met from inside.
-pub(in crate::spec) const EXIT_DRAWS: Bounds = Bounds::whole(1.0, 256.0);
-/// `bake.share_theta`: incoming directions sharing their photons
-/// (`crate::fiber::tracer::shared::MAX_SHARED` at most).
-pub(in crate::spec) const SHARE_THETA: Bounds = Bounds::whole(1.0, 8.0);
+pub(in crate::spec) const EXIT_DRAWS: Bounds = Bounds::whole(1.0, MAX_EXIT_DRAWS as f64);
+/// `bake.share_theta`: incoming directions sharing their photons.
+pub(in crate::spec) const SHARE_THETA: Bounds = Bounds::whole(1.0, MAX_SHARED as f64);
 /// `bake.target_rel_se` as a number: a relative standard error.
 pub(in crate::spec) const TARGET_REL_SE: Bounds = Bounds::above(0.0, 0.5);
 /// `bake.max_photons_per_direction`: the cap of adaptive allocation.
