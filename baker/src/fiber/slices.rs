@@ -57,7 +57,6 @@
 //! first-reflection share differs (independent, equal means: the spread's expectation is
 //! still the sum of their variances).
 
-use std::ops::Range;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -402,7 +401,7 @@ pub fn trace_slice(
         s,
         cancel,
         start,
-        |b, _, _, launches, apart| vec![job.trace_batch(b, launches[0], apart)],
+        |b, _, launches, apart| vec![job.trace_batch(b, launches[0], apart)],
     )?;
     Ok(r.pop().expect("one slice"))
 }
@@ -449,7 +448,7 @@ pub fn trace_group(
         s,
         cancel,
         start,
-        |b, members, active, launches, apart| job.trace_batch(b, members, active, launches, apart),
+        |b, members, launches, apart| job.trace_batch(b, members, launches, apart),
     )
 }
 
@@ -467,17 +466,20 @@ fn setup_of<'a>(
     )
 }
 
-/// The batches of the `windows.n` slices traced together: `batch(b, members, active,
-/// launches, apart)` traces batch `b` for the slices `members` of window b mod
-/// `windows.count()` that are still `active` (one score each, in order; `launches[i]` of
-/// slice i's first-reflection pass, tallied apart when `apart`). Rounds of one batch per
-/// window give every slice `windows.k` batches. A first pass of rounds (each slice at least
-/// its first batches), then, with a target, groups of batches until every slice reaches it or
-/// the cap; a slice that reaches it stops there, the others go on without it, and a window
-/// left with none is skipped (every batch is an unbiased estimate of each slice it scores, so
-/// the batch-means error of batches traced by different windows stays right: independent
-/// terms of one mean). The check sees the batches merged in order, so where the slices stop
-/// does not depend on the thread count.
+/// The batches of the `windows.n` slices traced together: `batch(b, members, launches,
+/// apart)` traces batch `b` for the slices `members` (in order; some of window b mod
+/// `windows.count()`) and returns one score each, in order (`launches[i]` of slice i's
+/// first-reflection pass, tallied apart when `apart`). Each step hands every slice an
+/// allotment of batches: in the first pass the rest of its first `photons`, then, with a
+/// target, the further batches the error's decline says it needs (none once it reaches the
+/// target), never past the cap. The windows are visited in turn, each batch scoring the
+/// window's slices that still have some of their allotment (a window without any is
+/// skipped), at most [`GROUP`] batches per step; so a slice gets exactly its batches, from
+/// every window it lies in, and one that reached its target gets no more (every batch is an
+/// unbiased estimate of each slice it scores, so the batch-means error of batches traced by
+/// different windows stays right: independent terms of one mean). The allotments come from
+/// the batches merged in order, so which batches score which slices does not depend on the
+/// thread count.
 fn drive(
     windows: Windows,
     grid: &AngularGrid,
@@ -485,16 +487,14 @@ fn drive(
     s: &BakeSettings,
     cancel: &Cancel,
     start: Instant,
-    batch: impl Fn(u64, Range<usize>, &[bool], &[u64], bool) -> Vec<BatchScore> + Sync,
+    batch: impl Fn(u64, &[usize], &[u64], bool) -> Vec<BatchScore> + Sync,
 ) -> Result<Vec<SliceResult>, Cancelled> {
-    let (n, k, per_round) = (windows.n, windows.k as u64, windows.count() as u64);
+    let (n, per_round) = (windows.n, windows.count() as u64);
     let first = s.batches_for(s.photons);
     let cap = match s.target {
         Some(_) => s.batches_for(s.max_photons).max(first),
         None => first,
     };
-    // The first pass's batches, over whole rounds.
-    let first_end = first.div_ceil(k) * per_round;
     let mut sums: Vec<SliceSums> = (0..n)
         .map(|_| SliceSums::new(grid, channels.len(), channels.per_variant()))
         .collect();
@@ -503,64 +503,57 @@ fn drive(
         false => 0,
     };
     let mut launches = vec![first_launches; n];
-    let mut active = vec![true; n];
-    let mut b0 = 0;
+    let (mut b0, mut first_pass) = (0, true);
     loop {
-        let in_first = b0 < first_end;
-        let mut group = GROUP;
-        if !in_first {
-            let Some(t) = s.target else { break };
-            let mut most = None;
-            for (a, x) in active.iter_mut().zip(&sums) {
-                let more = match x.used < cap {
-                    true => x.batches_to(grid, t).map(|m| m.min(cap - x.used)),
-                    false => None,
+        // What each slice may still take in this step.
+        let mut left: Vec<u64> = match first_pass {
+            true => sums.iter().map(|x| first.saturating_sub(x.used)).collect(),
+            false => {
+                let Some(t) = s.target else { break };
+                let more = |x: &SliceSums| match x.used < cap {
+                    true => x.batches_to(grid, t).map_or(0, |m| m.min(cap - x.used)),
+                    false => 0,
                 };
-                *a = more.is_some();
-                most = most.max(more);
+                sums.iter().map(more).collect()
             }
-            match most {
-                None => break,
-                // A slice gets k batches of every round.
-                Some(more) => group = more.saturating_mul(per_round).div_ceil(k).min(GROUP),
-            }
+        };
+        if left.iter().all(|&l| l == 0) {
+            break;
         }
         cancel.check()?;
-        // The next `group` batches of windows with an active slice (the first pass: up to
-        // its end).
-        let mut todo = Vec::new();
-        while todo.len() < group as usize && (!in_first || b0 < first_end) {
+        let mut todo: Vec<(u64, Vec<usize>)> = Vec::new();
+        while todo.len() < GROUP as usize && left.iter().any(|&l| l > 0) {
             let w = windows.members((b0 % per_round) as usize);
-            if active[w.clone()].iter().any(|&a| a) {
-                todo.push((b0, w));
+            let members: Vec<usize> = w.filter(|&i| left[i] > 0).collect();
+            if !members.is_empty() {
+                members.iter().for_each(|&i| left[i] -= 1);
+                todo.push((b0, members));
             }
             b0 += 1;
         }
         // The first pass tallies its reflection pass apart, to set the share that follows.
-        let apart = in_first && s.target.is_some() && first_launches > 0;
-        let parts: Vec<(Range<usize>, Vec<BatchScore>)> = todo
+        let apart = first_pass && s.target.is_some() && first_launches > 0;
+        let parts: Vec<(Vec<usize>, Vec<BatchScore>)> = todo
             .into_par_iter()
-            .map(|(b, w)| {
-                let part = batch(b, w.clone(), &active, &launches, apart);
-                (w, part)
+            .map(|(b, members)| {
+                let part = batch(b, &members, &launches, apart);
+                (members, part)
             })
             .collect();
-        for (w, part) in parts {
-            let to = w.filter(|&i| active[i]);
-            for (i, p) in to.zip(part) {
+        for (members, part) in parts {
+            debug_assert_eq!(members.len(), part.len());
+            for (&i, p) in members.iter().zip(part) {
                 sums[i].add(&p);
                 scratch::recycle(p.local);
                 scratch::recycle(p.reflection);
             }
         }
-        if in_first && b0 == first_end {
+        if first_pass && sums.iter().all(|x| x.used >= first) {
+            first_pass = false;
             if apart {
                 for (l, sum) in launches.iter_mut().zip(&sums) {
                     *l = sum.reflection_launches(grid, s.batch, first_launches);
                 }
-            }
-            if s.target.is_none() {
-                break;
             }
         }
     }
@@ -686,20 +679,18 @@ struct GroupJob<'a> {
 }
 
 impl GroupJob<'_> {
-    /// Batch `b` of the slices `members` still `active`: `s.batch` photons they share
+    /// Batch `b` of the slices `members`: `s.batch` photons they share
     /// ([`Setup::photon_shared`]) at stratified entry offsets, then each one's own
     /// first-reflection pass (`launches[i]` launches, tallied apart as well when `apart`), as
     /// [`SliceJob::trace_batch`] does.
     fn trace_batch(
         &self,
         b: u64,
-        members: Range<usize>,
-        active: &[bool],
+        members: &[usize],
         launches: &[u64],
         apart: bool,
     ) -> Vec<BatchScore> {
         let (grid, channels, s) = (self.grid, self.channels, self.s);
-        let members: Vec<usize> = members.filter(|&i| active[i]).collect();
         let setups: Vec<&Setup> = members.iter().map(|&i| &self.setups[i]).collect();
         let launches: Vec<u64> = members.iter().map(|&i| launches[i]).collect();
         let k = setups.len();
@@ -1211,11 +1202,13 @@ mod tests {
         assert_eq!(s.reflection_launches(&g, 4096, 256), 256);
     }
 
-    /// A column shared by sliding windows ([`drive`]): each batch reaches exactly the
-    /// directions of its window still tracing, and a direction that reached its target gets
-    /// nothing more. Six directions, windows of four; each batch marks bin 0 with its
-    /// direction's number, the last direction's alternating (so it never reaches the target
-    /// and goes on alone to its cap, through windows whose other directions have left).
+    /// A column shared by sliding windows ([`drive`]): each batch reaches only directions of
+    /// its window, every direction gets exactly its first pass (5 batches, not a whole
+    /// number of rounds), a direction that reached its target gets nothing more, and none
+    /// passes its cap (30: the first pass and whole steps of 16 batches would make 37). Six
+    /// directions, windows of four; each batch marks bin 0 with its direction's number, the
+    /// last direction's alternating (so it never reaches the target and goes on alone to its
+    /// cap, through windows whose other directions have left).
     #[test]
     fn window_batches_score_their_own_directions_until_each_leaves() {
         use super::super::sweep::Variant;
@@ -1228,9 +1221,9 @@ mod tests {
         let s = BakeSettings {
             res_deg: 30.0,
             batch: 64,
-            photons: 8 * 64,
+            photons: 5 * 64,
             target: Some(NoiseTarget::RelSe(1e-6)),
-            max_photons: 40 * 64,
+            max_photons: 30 * 64,
             ..BakeSettings::default()
         };
         let windows = Windows::new(6, 4);
@@ -1243,10 +1236,10 @@ mod tests {
             &s,
             &Cancel::NEVER,
             Instant::now(),
-            |b, members, active, _, _| {
+            |b, members, _, _| {
                 members
-                    .filter(|&i| active[i])
-                    .map(|i| {
+                    .iter()
+                    .map(|&i| {
                         let v = match (i == last, b % 2) {
                             (true, 0) => 10.0,
                             (true, _) => 12.0,
@@ -1269,7 +1262,7 @@ mod tests {
         )
         .unwrap();
         let scored = scored.into_inner().unwrap();
-        // The first pass: two rounds of the nine windows, four batches of each per direction.
+        // The first pass: five batches per direction, within two rounds of the nine windows.
         let first_end = 2 * windows.count() as u64;
         for (i, r) in r.iter().enumerate() {
             let mut b = scored[i].clone();
@@ -1287,7 +1280,7 @@ mod tests {
             } else {
                 // Its own marker alone, and no batch after the first pass.
                 assert_eq!(r.fraction[0], (i + 1) as f64, "direction {i}");
-                assert_eq!(b.len(), 8, "direction {i}");
+                assert_eq!(b.len(), 5, "direction {i}");
                 assert!(b.iter().all(|&x| x < first_end), "direction {i}: {b:?}");
             }
         }

@@ -231,10 +231,12 @@ fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
             * nch
             * grid_bins
             * value_bytes;
-        // Batches in flight hold every slice of a window sharing its photons, and the
-        // columns being traced (one per thread) every slice's sums.
+        // Batches in flight hold every slice of a window sharing its photons; the columns
+        // being traced (at most a unit's) hold every slice's sums (the channels and four
+        // error arrays per bin).
         let share = f64::from(e.estimators.share_theta.clamp(1, MAX_SHARED as u32));
-        let in_flight = 2.0 * t * 18.0 * per_slice * share + t * column * per_slice;
+        let sums = unit_dirs as f64 * (per_slice + 4.0 * grid_bins * 8.0);
+        let in_flight = 2.0 * t * 18.0 * per_slice * share + sums;
         memory = memory.max(3.0 * unit + in_flight + 8192.0 * nch * 8.0 + tables);
     }
     Cost {
