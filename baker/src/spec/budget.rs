@@ -221,7 +221,7 @@ fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
         // Directions sharing their photons are traced a φ column (at most every θ row) at a
         // time, and a unit of columns may end up to a column past `unit_len`.
         let column = match e.estimators.share_theta > 1 {
-            true => grid_bins / (360.0 / st.res_deg).round().max(1.0),
+            true => (180.0 / st.res_deg).round().max(1.0),
             false => 1.0,
         };
         let unit_dirs = crate::fiber::slices::unit_len(e.stored_directions) + column as usize - 1;

@@ -15,6 +15,7 @@ use super::setup::typical_path_um;
 use crate::cancel::{Cancel, Cancelled};
 use crate::fiber::slices::{trace_group, BakeSettings, SliceResult};
 use crate::fiber::sweep::{ChannelKind, Channels, Variant};
+use crate::fiber::tracer::shared::Windows;
 use crate::fiber::{Fiber, Incident};
 use formats::AngularGrid;
 
@@ -63,8 +64,9 @@ pub fn trace_direction(
     let res = st.res_deg.to_radians();
     let it = (((inc.theta_rad + 0.5 * std::f64::consts::PI) / res).floor() as usize)
         .min(grid.n_theta - 1);
-    let it0 = (it + 1).saturating_sub(k);
-    let incs: Vec<Incident> = (it0..(it + k).min(grid.n_theta))
+    let windows = Windows::new(grid.n_theta, k);
+    let it0 = windows.members(it).start;
+    let incs: Vec<Incident> = (it0..windows.members(it + windows.k - 1).end)
         .map(|t| Incident {
             theta_rad: inc.theta_rad + (t as f64 - it as f64) * res,
             ..inc
