@@ -756,7 +756,7 @@ impl GroupJob<'_> {
 }
 
 /// One batch's scores: weight per bin and channel, each exit weighted by every channel's
-/// attenuation over its path ([`Channels::add_weighted`], evaluated once per path length).
+/// attenuation over its path ([`Channels::attenuations`], evaluated once per path length).
 ///
 /// The batch's tallies are `f32` (the slice's sums over batches, the albedos and the error
 /// estimates are `f64`): a sweep's exit adds a row of every variant's channels to each bin
@@ -778,7 +778,7 @@ struct ChannelScore<'a> {
     /// Per slice of a shared photon's group ([`crate::fiber::tracer::shared`]; one slice,
     /// weight 1, otherwise): the weight of what is scored, applied to its row of channels.
     weights: Vec<f64>,
-    /// One path length's channel attenuations ([`Channels::add_weighted`]).
+    /// One path length's channel attenuations ([`Channels::attenuations`]).
     dye: Vec<f64>,
     /// `weights` ⊗ `dye`: slice-major, `[slice][channel]`.
     row: Vec<f64>,
@@ -851,16 +851,17 @@ impl Exits for ChannelScore<'_> {
     fn leave_bin(&mut self, bin: u32, path_um: f64, w: f64) {
         if path_um != self.last {
             self.settle();
-            self.dye.iter_mut().for_each(|x| *x = 0.0);
-            self.channels.add_weighted(path_um, 1.0, &mut self.dye);
+            self.channels.attenuations(path_um, &mut self.dye);
             let nc = self.dye.len();
-            for (k, &wk) in self.weights.iter().enumerate() {
-                for (c, &x) in self.dye.iter().enumerate() {
-                    self.row[k * nc + c] = wk * x;
+            let rows = self
+                .row
+                .chunks_exact_mut(nc)
+                .zip(self.row32.chunks_exact_mut(nc));
+            for ((row, row32), &wk) in rows.zip(&self.weights) {
+                for ((r, r32), &x) in row.iter_mut().zip(row32).zip(&self.dye) {
+                    *r = wk * x;
+                    *r32 = *r as f32;
                 }
-            }
-            for (a, &x) in self.row32.iter_mut().zip(&self.row) {
-                *a = x as f32;
             }
             self.last = path_um;
         }

@@ -199,9 +199,9 @@ impl Channels {
         self.channel_names.len()
     }
 
-    /// Adds `w`·(every channel's weight at path `path_um`) to `out`.
+    /// Every channel's weight at path `path_um`, into `out`.
     #[inline]
-    pub fn add_weighted(&self, path_um: f64, w: f64, out: &mut [f64]) {
+    pub fn attenuations(&self, path_um: f64, out: &mut [f64]) {
         let n = self.terms.len();
         let x = path_um * self.inv_step;
         let (i, f) = if x + 1.0 < self.len as f64 {
@@ -211,7 +211,7 @@ impl Channels {
             (self.len - 1 + j, f)
         } else {
             for (o, t) in out.iter_mut().zip(&self.terms) {
-                *o += w * exact(t, path_um);
+                *o = exact(t, path_um);
             }
             return;
         };
@@ -220,7 +220,7 @@ impl Channels {
             &self.table[(i + 1) * n..(i + 2) * n],
         );
         for ((o, &a), &b) in out.iter_mut().zip(a).zip(b) {
-            *o += w * (a + f * (b - a));
+            *o = a + f * (b - a);
         }
     }
 
@@ -381,10 +381,10 @@ mod tests {
             for &l in &[
                 0.0, 0.37, 5.0, 42.4, 299.0, 300.4, 1500.0, 7.5e3, 2.0e5, 1e9,
             ] {
-                let mut got = vec![0.0; ch.len()];
-                ch.add_weighted(l, 2.0, &mut got);
+                let mut got = vec![f64::NAN; ch.len()];
+                ch.attenuations(l, &mut got);
                 for (c, t) in ch.terms.iter().enumerate() {
-                    let want = 2.0 * exact(t, l);
+                    let want = exact(t, l);
                     assert!(
                         (got[c] - want).abs() <= 1e-4 * want.abs() + 1e-12,
                         "{kind:?} ℓ {l} channel {c}: {} vs {want}",
@@ -405,7 +405,7 @@ mod tests {
             }
             // White: every channel is 1 at any path.
             let mut w = vec![0.0; ch.len()];
-            ch.add_weighted(77.0, 1.0, &mut w);
+            ch.attenuations(77.0, &mut w);
             for x in &w[..ch.per_variant()] {
                 assert!((x - 1.0).abs() < 1e-12);
             }
