@@ -370,8 +370,20 @@ const MIN_REFLECTION_SHARE: u64 = 1;
 /// The most photons per launch of the first-reflection pass after the first pass.
 const MAX_REFLECTION_SHARE: u64 = 64;
 
-/// Batches traced before their tallies are merged (bounds memory for wide sweeps).
-const GROUP: u64 = 16;
+/// What the tallies of one step's batches may hold ([`step_batches`]).
+const STEP_BYTES: f64 = 256.0 * 1024.0 * 1024.0;
+
+/// Batches traced in one step of [`drive`] before their tallies are merged in order: as many
+/// as [`STEP_BYTES`] hold (each batch's f32 tallies of `share` slices × `nch` channels ×
+/// `bins`, twice over for the first-reflection pass tallied apart), between 16 and 128. A
+/// step ends with the cores waiting for its last batch, about half a batch each, so more
+/// batches per step idle less: 16 left 6 % of two cores idle tracing silk and cotton at 2°
+/// (`validation/bench-runs/2026-12-07-fiber-steps`); a wide sweep's tallies keep it at 16.
+/// From the spec alone, so the batches each slice gets do not depend on the thread count.
+pub fn step_batches(bins: usize, nch: usize, share: usize) -> u64 {
+    let per_batch = (bins * nch * share.max(1) * 4 * 2).max(1) as f64;
+    ((STEP_BYTES / per_batch) as u64).clamp(16, 128)
+}
 
 /// Traces one incoming bin for every channel. Deterministic for a given seed whatever the
 /// thread count (batches are merged in order). `cancel` is checked before every group of
@@ -474,7 +486,7 @@ fn setup_of<'a>(
 /// target, the further batches the error's decline says it needs (none once it reaches the
 /// target), never past the cap. The windows are visited in turn, each batch scoring the
 /// window's slices that still have some of their allotment (a window without any is
-/// skipped), at most [`GROUP`] batches per step; so a slice gets exactly its batches, from
+/// skipped), at most [`step_batches`] per step; so a slice gets exactly its batches, from
 /// every window it lies in, and one that reached its target gets no more (every batch is an
 /// unbiased estimate of each slice it scores, so the batch-means error of batches traced by
 /// different windows stays right: independent terms of one mean). The allotments come from
@@ -490,6 +502,7 @@ fn drive(
     batch: impl Fn(u64, &[usize], &[u64], bool) -> Vec<BatchScore> + Sync,
 ) -> Result<Vec<SliceResult>, Cancelled> {
     let (n, per_round) = (windows.n, windows.count() as u64);
+    let step = step_batches(grid.bins(), channels.len(), windows.k) as usize;
     let first = s.batches_for(s.photons);
     let cap = match s.target {
         Some(_) => s.batches_for(s.max_photons).max(first),
@@ -522,7 +535,7 @@ fn drive(
         }
         cancel.check()?;
         let mut todo: Vec<(u64, Vec<usize>)> = Vec::new();
-        while todo.len() < GROUP as usize && left.iter().any(|&l| l > 0) {
+        while todo.len() < step && left.iter().any(|&l| l > 0) {
             let w = windows.members((b0 % per_round) as usize);
             let members: Vec<usize> = w.filter(|&i| left[i] > 0).collect();
             if !members.is_empty() {
@@ -1203,10 +1216,21 @@ mod tests {
         assert_eq!(s.reflection_launches(&g, 4096, 256), 256);
     }
 
+    /// A step holds what 256 MiB of tallies hold, between 16 and 128 batches: 86 for the
+    /// thesis's 2° tables (16,200 bins, RGB, 8 shared rows), 16 for a 20-variant sweep there,
+    /// 128 at 6° for one slice.
+    #[test]
+    fn a_step_holds_what_its_tallies_allow() {
+        assert_eq!(step_batches(16_200, 3, 8), 86);
+        assert_eq!(step_batches(16_200, 60, 8), 16);
+        assert_eq!(step_batches(1_800, 3, 1), 128);
+        assert_eq!(step_batches(16_200, 3, 0), step_batches(16_200, 3, 1));
+    }
+
     /// A column shared by sliding windows ([`drive`]): each batch reaches only directions of
     /// its window, every direction gets exactly its first pass (5 batches, not a whole
     /// number of rounds), a direction that reached its target gets nothing more, and none
-    /// passes its cap (30: the first pass and whole steps of 16 batches would make 37). Six
+    /// passes its cap (30: the first pass and whole steps of batches would pass it). Six
     /// directions, windows of four; each batch marks bin 0 with its direction's number, the
     /// last direction's alternating (so it never reaches the target and goes on alone to its
     /// cap, through windows whose other directions have left).

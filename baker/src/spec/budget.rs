@@ -231,12 +231,15 @@ fn fiber_cost(s: &FiberSpec, o: &Overrides) -> Cost {
             * nch
             * grid_bins
             * value_bytes;
-        // Batches in flight hold every slice of a window sharing its photons; the columns
-        // being traced (at most a unit's) hold every slice's sums (the channels and four
-        // error arrays per bin).
-        let share = f64::from(e.estimators.share_theta.clamp(1, MAX_SHARED as u32));
+        // A step's batches hold every slice of a window sharing its photons, in f32, twice
+        // over in the first pass (its reflection pass apart), and one more batch per thread
+        // is being traced; the columns being traced (at most a unit's) hold every slice's sums
+        // (the channels and four error arrays per bin).
+        let share = e.estimators.share_theta.clamp(1, MAX_SHARED as u32) as usize;
+        let step = crate::fiber::slices::step_batches(grid_bins as usize, nch as usize, share);
+        let batch_bytes = per_slice / 2.0 * share as f64;
         let sums = unit_dirs as f64 * (per_slice + 4.0 * grid_bins * 8.0);
-        let in_flight = 2.0 * t * 18.0 * per_slice * share + sums;
+        let in_flight = (2.0 * step as f64 + t) * batch_bytes + sums;
         memory = memory.max(3.0 * unit + in_flight + 8192.0 * nch * 8.0 + tables);
     }
     Cost {
