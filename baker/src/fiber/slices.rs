@@ -373,8 +373,8 @@ const MAX_REFLECTION_SHARE: u64 = 64;
 /// What the tallies of one step's batches may hold ([`step_batches`]).
 const STEP_BYTES: f64 = 256.0 * 1024.0 * 1024.0;
 
-/// Batches traced in one step of [`drive`] before their tallies are merged in order: as many
-/// as [`STEP_BYTES`] hold (each batch's f32 tallies of `share` slices × `nch` channels ×
+/// Batches traced in one step of `drive` before their tallies are merged in order: as many
+/// as 256 MiB hold (`STEP_BYTES`; each batch's f32 tallies of `share` slices × `nch` channels ×
 /// `bins`, twice over for the first-reflection pass tallied apart), between 16 and 128. A
 /// step ends with the cores waiting for its last batch, about half a batch each, so more
 /// batches per step idle less: 16 left 6 % of two cores idle tracing silk and cotton at 2°
