@@ -298,9 +298,6 @@ fn deflate_planes(data: &[u8], rle: usize) -> anyhow::Result<Vec<u8>> {
             Status::StreamEnd,
         ),
     ] {
-        if part.is_empty() && flush == DeflateFlush::SyncFlush {
-            continue;
-        }
         let mut z = Deflate::new_with_config(raw(CHUNK_DEFLATE_LEVEL, strategy));
         let status = z
             .compress(part, &mut out[at..], flush)
