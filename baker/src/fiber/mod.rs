@@ -7,6 +7,7 @@
 //! the direction a photon leaves in; θ = asin(ω·z), φ = atan2(ω·y, ω·x). Lengths in µm.
 
 pub mod dye;
+pub mod exit_bins;
 pub mod lobe;
 pub mod material;
 mod scratch;

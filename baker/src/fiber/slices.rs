@@ -61,6 +61,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::exit_bins::ExitBins;
 use super::scratch;
 use super::sweep::{ChannelKind, Channels};
 use super::tracer::shared::{SharedExits, Windows, MAX_SHARED};
@@ -400,8 +401,8 @@ pub fn trace_slice(
     let start = Instant::now();
     let job = SliceJob {
         setup: setup_of(fiber, inc, grid, s),
-        inc,
         grid,
+        bins: ExitBins::new(grid, inc.phi_rad),
         channels,
         s,
         seed,
@@ -447,7 +448,7 @@ pub fn trace_group(
     let start = Instant::now();
     let job = GroupJob {
         setups,
-        phi_i: incs[0].phi_rad,
+        bins: ExitBins::new(grid, incs[0].phi_rad),
         grid,
         channels,
         s,
@@ -604,8 +605,9 @@ fn photon_sampler<'r>(
 /// What every batch of one incoming bin shares.
 struct SliceJob<'a> {
     setup: Setup<'a>,
-    inc: Incident,
     grid: &'a AngularGrid,
+    /// The outgoing bins of the incoming azimuth.
+    bins: ExitBins,
     channels: &'a Channels,
     s: &'a BakeSettings,
     seed: u64,
@@ -634,7 +636,7 @@ impl SliceJob<'_> {
     fn trace_batch(&self, b: u64, launches: u64, apart: bool) -> BatchScore {
         let (grid, channels, s) = (self.grid, self.channels, self.s);
         let mut rng = batch_rng(self.seed, b);
-        let mut sc = ChannelScore::new(grid, channels, self.inc.phi_rad);
+        let mut sc = ChannelScore::new(grid, &self.bins, channels);
         let (mut h, mut l, mut gsum) = (0u64, 0.0, 0.0);
         let n = s.batch;
         let scramble = (s.sampling == Sampling::Sobol).then(|| Scramble::draw(&mut rng));
@@ -654,7 +656,7 @@ impl SliceJob<'_> {
         // independent points on polyester).
         let mut reflection = Vec::new();
         if launches > 0 {
-            let mut own = apart.then(|| ChannelScore::new(grid, channels, self.inc.phi_rad));
+            let mut own = apart.then(|| ChannelScore::new(grid, &self.bins, channels));
             let to = own.as_mut().unwrap_or(&mut sc);
             let scramble = Scramble::draw(&mut rng);
             let scale = n as f64 / launches as f64;
@@ -684,7 +686,8 @@ impl SliceJob<'_> {
 /// What every batch of a group of slices sharing their photons shares ([`trace_group`]).
 struct GroupJob<'a> {
     setups: Vec<Setup<'a>>,
-    phi_i: f64,
+    /// The outgoing bins of the group's incoming azimuth.
+    bins: ExitBins,
     grid: &'a AngularGrid,
     channels: &'a Channels,
     s: &'a BakeSettings,
@@ -708,7 +711,7 @@ impl GroupJob<'_> {
         let launches: Vec<u64> = members.iter().map(|&i| launches[i]).collect();
         let k = setups.len();
         let mut rng = batch_rng(self.seed, b);
-        let mut sc = ChannelScore::shared(grid, channels, self.phi_i, k);
+        let mut sc = ChannelScore::shared(grid, &self.bins, channels, k);
         let (mut hits, mut lost, mut gsum) = (0u64, vec![0.0; k], vec![0.0; k]);
         let n = s.batch;
         let scramble = (s.sampling == Sampling::Sobol).then(|| Scramble::draw(&mut rng));
@@ -748,7 +751,7 @@ impl GroupJob<'_> {
             if launches[i] == 0 {
                 continue;
             }
-            let mut pass = ChannelScore::new(grid, channels, self.phi_i);
+            let mut pass = ChannelScore::new(grid, &self.bins, channels);
             let scramble = Scramble::draw(&mut rng);
             let scale = n as f64 / launches[i] as f64;
             for l in 0..launches[i] {
@@ -803,17 +806,22 @@ struct ChannelScore<'a> {
     pending: f64,
     last: f64,
     channels: &'a Channels,
-    grid: AngularGrid,
-    phi_i: f64,
+    /// The outgoing bins of the incoming azimuth.
+    bins: &'a ExitBins,
 }
 
 impl<'a> ChannelScore<'a> {
-    fn new(grid: &AngularGrid, channels: &'a Channels, phi_i: f64) -> Self {
-        Self::shared(grid, channels, phi_i, 1)
+    fn new(grid: &AngularGrid, bins: &'a ExitBins, channels: &'a Channels) -> Self {
+        Self::shared(grid, bins, channels, 1)
     }
 
     /// The scores of `slices` slices at once, `[bin][slice][channel]`.
-    fn shared(grid: &AngularGrid, channels: &'a Channels, phi_i: f64, slices: usize) -> Self {
+    fn shared(
+        grid: &AngularGrid,
+        bins: &'a ExitBins,
+        channels: &'a Channels,
+        slices: usize,
+    ) -> Self {
         let nch = channels.len() * slices;
         ChannelScore {
             local: scratch::zeroed(grid.bins() * nch),
@@ -825,8 +833,7 @@ impl<'a> ChannelScore<'a> {
             pending: 0.0,
             last: f64::NAN,
             channels,
-            grid: *grid,
-            phi_i,
+            bins,
         }
     }
 
@@ -856,7 +863,7 @@ impl<'a> ChannelScore<'a> {
 impl Exits for ChannelScore<'_> {
     #[inline]
     fn leave(&mut self, dir: [f64; 3], path_um: f64, w: f64) {
-        let bin = self.grid.bin(dir, self.phi_i);
+        let bin = self.bins.bin(dir);
         self.leave_bin(bin, path_um, w);
     }
 

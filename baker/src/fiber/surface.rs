@@ -20,6 +20,7 @@
 
 use crate::math::exp::exp_neg_f32;
 use crate::math::fresnel;
+use crate::math::turns::sin_cos_turns;
 
 /// Largest number of facet events inside one V-cavity before falling back to the mean
 /// surface (only reached at extreme grazing angles; counted in [`SurfaceStats`]).
@@ -186,10 +187,9 @@ impl Surface {
     /// m from D(m)(m·n), then m or its mirror m′ with probabilities ∝ ⟨wi·m⟩, ⟨wi·m′⟩.
     #[inline]
     fn sample_visible(&self, wi: [f64; 3], n: [f64; 3], u: &mut impl FnMut() -> f64) -> [f64; 3] {
-        let (cos_t, phi) = sample_beckmann(self.alpha, u(), u());
+        let (cos_t, (sp, cp)) = sample_beckmann(self.alpha, u(), u());
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
         let (t, b) = basis(n);
-        let (sp, cp) = phi.sin_cos();
         let m = [
             sin_t * cp * t[0] + sin_t * sp * b[0] + cos_t * n[0],
             sin_t * cp * t[1] + sin_t * sp * b[1] + cos_t * n[1],
@@ -369,11 +369,12 @@ impl FacetPdf {
 
 /// A Beckmann facet normal with pdf D(m)(m·n) dω: tan²θm = −α² ln u1 (the slopes are
 /// Gaussian, so tan²θm is exponential with mean α²; Walter et al. 2007, Eq. 28), φm = 2π u2.
-/// Returns (cos θm, φm). Its density over θm is [`beckmann_pdf_theta`].
+/// Returns (cos θm, (sin φm, cos φm)), the azimuth's by [`sin_cos_turns`] (every boundary draw
+/// takes one). Its density over θm is [`beckmann_pdf_theta`].
 #[inline]
-pub fn sample_beckmann(alpha: f64, u1: f64, u2: f64) -> (f64, f64) {
+pub fn sample_beckmann(alpha: f64, u1: f64, u2: f64) -> (f64, (f64, f64)) {
     let tan2 = -alpha * alpha * u1.ln();
-    (1.0 / (1.0 + tan2).sqrt(), std::f64::consts::TAU * u2)
+    (1.0 / (1.0 + tan2).sqrt(), sin_cos_turns(u2))
 }
 
 /// Density over θm of [`sample_beckmann`]'s normals, D(m) cos θm sin θm · 2π with the
@@ -469,10 +470,10 @@ mod tests {
             let alpha = beta_deg.to_radians().tan();
             let (mut theta, mut phi) = (Vec::new(), Vec::new());
             for _ in 0..200_000 {
-                let (c, p) =
+                let (c, (sp, cp)) =
                     sample_beckmann(alpha, uniform(rng.next_u64()), uniform(rng.next_u64()));
                 theta.push(c.acos());
-                phi.push(p);
+                phi.push(sp.atan2(cp).rem_euclid(std::f64::consts::TAU));
             }
             let hi = (alpha * 5.0).atan();
             crate::stats::chi2::chi2_test_1d(

@@ -1,8 +1,9 @@
 //! Numerical building blocks shared by the physics: random streams and their seeds,
-//! quadrature rules, Fresnel factors and a vectorisable exponential.
+//! quadrature rules, Fresnel factors, a vectorisable exponential and sin/cos of angles in turns.
 
 pub mod exp;
 pub mod fresnel;
 pub mod quadrature;
 pub mod rng;
 pub mod sampler;
+pub mod turns;

@@ -74,7 +74,8 @@ impl SegmentGrid {
     /// The cell holding `p`, clamped to the grid.
     pub fn cell_of(&self, p: [f64; 2]) -> [usize; 2] {
         std::array::from_fn(|k| {
-            (((p[k] - self.min[k]) / self.cell[k]).floor().max(0.0) as usize).min(self.n[k] - 1)
+            // Truncation is the floor for the non-negative values kept (negatives clamp to 0).
+            (((p[k] - self.min[k]) / self.cell[k]).max(0.0) as usize).min(self.n[k] - 1)
         })
     }
 

@@ -312,7 +312,8 @@ impl Polygon {
         let mut t_next = [f64::INFINITY; 2];
         let mut t_delta = [f64::INFINITY; 2];
         for k in 0..2 {
-            let c = ((p[k] - g.min[k]) / g.cell[k]).floor();
+            // Truncation is the floor here: negative (and NaN) positions clamp to cell 0.
+            let c = (p[k] - g.min[k]) / g.cell[k];
             cell[k] = (c.max(0.0) as usize).min(g.n[k] - 1);
             if d[k] > 0.0 {
                 step[k] = 1;

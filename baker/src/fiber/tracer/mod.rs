@@ -19,6 +19,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::exit_bins::ExitBins;
 use super::lobe::{Event, Lobe, LobeGrid};
 use super::tally::DirectionTally;
 use super::{Fiber, Section, Surface};
@@ -121,6 +122,18 @@ struct Ray {
     w: f64,
 }
 
+/// The part of a launch that depends on its azimuth only ([`Setup::beam_at`]).
+#[derive(Debug, Clone, Copy)]
+struct Beam {
+    /// Unit xy direction of travel and the beam's cross axis.
+    dhat: [f64; 2],
+    e_perp: [f64; 2],
+    /// The beam's extent along `e_perp`, µm.
+    beam: (f64, f64),
+    /// (sin φ, cos φ) of a spread launch's azimuth (`None`: the centre's direction).
+    trig: Option<(f64, f64)>,
+}
+
 /// What one photon (with all its branches) did, besides what it emitted.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct PhotonStats {
@@ -198,6 +211,8 @@ pub(crate) struct Setup<'a> {
     s_max: f64,
     /// W(φc)·cos θc, the normalisation of spread weights.
     w_centre: f64,
+    /// sin of the spread bin's lower and upper elevation, when the incident has a spread.
+    sin_bounds: Option<(f64, f64)>,
     surface: Surface,
     /// Unit direction of travel, −ωi.
     d: [f64; 3],
@@ -250,6 +265,12 @@ impl<'a> Setup<'a> {
             inc,
 
             w_centre: (hi - lo) * s_max * ct,
+            sin_bounds: inc.spread.map(|(dt, _)| {
+                (
+                    (inc.theta_rad - 0.5 * dt).sin(),
+                    (inc.theta_rad + 0.5 * dt).sin(),
+                )
+            }),
             surface: fiber.surface,
             d,
             dhat,
@@ -358,27 +379,55 @@ impl<'a> Setup<'a> {
     /// `z` the uniform number of the height along a cuticle period.
     #[inline]
     fn launch_at(&self, spread: Option<(f64, f64)>, f: f64, z: Option<f64>) -> (Ray, f64) {
-        let (d, dhat, e_perp, beam, g) = match self.inc.spread.zip(spread) {
-            None => (self.d, self.dhat, self.e_perp, self.beam, 1.0),
-            Some(((dt, dp), (u0, u1))) => {
-                // Uniform in solid angle: uniform in sin θ and φ.
-                let (s0, s1) = (
-                    (self.inc.theta_rad - 0.5 * dt).sin(),
-                    (self.inc.theta_rad + 0.5 * dt).sin(),
-                );
-                let st = s0 + (s1 - s0) * u0;
-                let ct = (1.0 - st * st).max(0.0).sqrt();
+        let beam = self.beam_at(spread.map(|s| s.1));
+        self.launch_in(&beam, spread.map(|s| s.0), f, z)
+    }
+
+    /// The beam of a launch, which depends on its azimuth only: the centre's without a spread
+    /// (or without `u1`), else φ = φc + Δφ·(u1 − ½) of the spread's bin. The setups of a
+    /// shared group ([`shared`]) have one azimuth and one section, so one beam serves them all.
+    #[inline]
+    fn beam_at(&self, u1: Option<f64>) -> Beam {
+        match self.inc.spread.zip(u1) {
+            None => Beam {
+                dhat: self.dhat,
+                e_perp: self.e_perp,
+                beam: self.beam,
+                trig: None,
+            },
+            Some(((_, dp), u1)) => {
                 let phi = self.inc.phi_rad + dp * (u1 - 0.5);
                 let (sp, cp) = phi.sin_cos();
                 let dhat = [-cp, -sp];
                 let e_perp = [sp, -cp];
                 let (lo, hi) = self.section.extent(e_perp);
-                let beam = (lo * self.s_max, hi * self.s_max);
-                let g = (beam.1 - beam.0) * ct / self.w_centre;
-                ([-ct * cp, -ct * sp, -st], dhat, e_perp, beam, g)
+                Beam {
+                    dhat,
+                    e_perp,
+                    beam: (lo * self.s_max, hi * self.s_max),
+                    trig: Some((sp, cp)),
+                }
             }
+        }
+    }
+
+    /// A photon's ray in `beam` at elevation number `u0` (used when the incident has a
+    /// spread: uniform in sin θ over the bin), offset `f` across the beam and cuticle height
+    /// number `z`, and its spread weight g = W(φ)·cos θ / (W(φc)·cos θc).
+    #[inline]
+    fn launch_in(&self, beam: &Beam, u0: Option<f64>, f: f64, z: Option<f64>) -> (Ray, f64) {
+        let (d, g) = match (beam.trig, u0, self.sin_bounds) {
+            (Some((sp, cp)), Some(u0), Some((s0, s1))) => {
+                // Uniform in solid angle: uniform in sin θ and φ.
+                let st = s0 + (s1 - s0) * u0;
+                let ct = (1.0 - st * st).max(0.0).sqrt();
+                let g = (beam.beam.1 - beam.beam.0) * ct / self.w_centre;
+                ([-ct * cp, -ct * sp, -st], g)
+            }
+            _ => (self.d, 1.0),
         };
-        let h = beam.0 + (beam.1 - beam.0) * f;
+        let (dhat, e_perp, b) = (beam.dhat, beam.e_perp, beam.beam);
+        let h = b.0 + (b.1 - b.0) * f;
         let o = [
             h * e_perp[0] - self.r_start * dhat[0],
             h * e_perp[1] - self.r_start * dhat[1],
@@ -728,6 +777,7 @@ impl<'a> Setup<'a> {
 pub fn trace(fiber: &Fiber, inc: Incident, o: &TraceOptions) -> TraceResult {
     let start = Instant::now();
     let setup = Setup::new(fiber, inc);
+    let bins = ExitBins::new(&o.grid, inc.phi_rad);
     let n_batches = o.photons.div_ceil(BATCH);
     let mut total = DirectionTally::new(o.grid, &o.mua_per_um);
     let mut b0 = 0;
@@ -737,7 +787,7 @@ pub fn trace(fiber: &Fiber, inc: Incident, o: &TraceOptions) -> TraceResult {
             .into_par_iter()
             .map(|b| {
                 let n = BATCH.min(o.photons - b * BATCH);
-                let t = trace_batch(&setup, inc, o, b, n);
+                let t = trace_batch(&setup, &bins, o, b, n);
                 crate::progress::advance(&o.progress, n);
                 t
             })
@@ -758,7 +808,7 @@ pub fn trace(fiber: &Fiber, inc: Incident, o: &TraceOptions) -> TraceResult {
 
 fn trace_batch(
     setup: &Setup,
-    inc: Incident,
+    bins: &ExitBins,
     o: &TraceOptions,
     batch: u64,
     n: u64,
@@ -766,12 +816,7 @@ fn trace_batch(
     let mut rng = batch_rng(o.seed, batch);
     let mut t = DirectionTally::new(o.grid, &o.mua_per_um);
     t.launched = n;
-    let grid = o.grid;
-    let mut exits = TallyExits {
-        t: &mut t,
-        grid,
-        phi_i: inc.phi_rad,
-    };
+    let mut exits = TallyExits { t: &mut t, bins };
     for _ in 0..n {
         let st = setup.photon(
             &mut PathSampler::random(&mut rng),
@@ -794,13 +839,12 @@ fn trace_batch(
 /// The plain tracer's scoring: every exit into its bin of a [`DirectionTally`].
 struct TallyExits<'a> {
     t: &'a mut DirectionTally,
-    grid: formats::AngularGrid,
-    phi_i: f64,
+    bins: &'a ExitBins,
 }
 
 impl Exits for TallyExits<'_> {
     fn leave(&mut self, dir: [f64; 3], path_um: f64, w: f64) {
-        self.t.score(self.grid.bin(dir, self.phi_i), path_um, w)
+        self.t.score(self.bins.bin(dir), path_um, w)
     }
 
     fn leave_bin(&mut self, bin: u32, path_um: f64, w: f64) {

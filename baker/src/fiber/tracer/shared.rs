@@ -127,8 +127,10 @@ impl Setup<'_> {
         let mut dir = [[0.0; 3]; MAX_SHARED];
         let mut g = [0.0; MAX_SHARED];
         let mut ray = None;
+        // One azimuth for the group: one beam.
+        let beam = s0.beam_at(spread.map(|s| s.1));
         for (k, s) in group.iter().enumerate() {
-            let (r, gk) = s.launch_at(spread, f, None);
+            let (r, gk) = s.launch_in(&beam, spread.map(|s| s.0), f, None);
             stats[k] = PhotonStats {
                 g: gk,
                 ..PhotonStats::default()
