@@ -12,6 +12,8 @@
 //!   rows are bound by latency); tested within 4 ulp of `f64::exp` (measured: 1 ulp over the
 //!   test's 300,000 arguments); 0 below −708 (e^x < 4·10⁻³⁰⁸).
 
+use super::poly::estrin;
+
 /// The f32 constants: ln 2 in two parts (fdlibm's `expf` ln2_hi, ln2_lo, by their bits; the
 /// high part has nine trailing zero bits, so k·LN2_HI is exact for |k| < 2⁹), 1.5·2²³ (adding
 /// it rounds a value below 2²² to the nearest integer, ties to even, and leaves that integer
@@ -25,7 +27,7 @@ const FLOOR_F32: f32 = -87.0;
 /// |k| < 2¹¹) and ln2_lo, 1.5·2⁵², and the floor.
 const LN2_HI_F64: f64 = f64::from_bits(0x3fe6_2e42_fee0_0000);
 const LN2_LO_F64: f64 = f64::from_bits(0x3dea_39ef_3579_3c76);
-const ROUND_F64: f64 = 6_755_399_441_055_744.0;
+pub(crate) const ROUND_F64: f64 = 6_755_399_441_055_744.0;
 const FLOOR_F64: f64 = -708.0;
 
 /// 1/k! for k = 2 … N + 1.
@@ -84,22 +86,9 @@ pub fn exp_neg_f64(x: f64) -> f64 {
     let kf = t - ROUND_F64;
     let k = (t.to_bits() as i64).wrapping_sub(ROUND_F64.to_bits() as i64);
     let r = (xc - kf * LN2_HI_F64) - kf * LN2_LO_F64;
-    // Estrin's scheme (pairs, then powers r², r⁴, r⁸): a dependency chain of 8 operations
-    // instead of Horner's 22, so a row of the sweep table is not bound by add latency.
-    let c = &INV_FACT_F64;
-    let r2 = r * r;
-    let r4 = r2 * r2;
-    let r8 = r4 * r4;
-    let q0 = c[0] + c[1] * r;
-    let q1 = c[2] + c[3] * r;
-    let q2 = c[4] + c[5] * r;
-    let q3 = c[6] + c[7] * r;
-    let q4 = c[8] + c[9] * r;
-    let q5 = c[10] + c[11] * r;
-    let s0 = q0 + q1 * r2;
-    let s1 = q2 + q3 * r2;
-    let s2 = q4 + q5 * r2;
-    let p = (s0 + s1 * r4) + s2 * r8;
+    // Estrin's scheme: a dependency chain of 8 operations instead of Horner's 22, so a row of
+    // the sweep table is not bound by add latency.
+    let p = estrin(&INV_FACT_F64, r);
     let er = 1.0 + r * (1.0 + r * p);
     let scale = f64::from_bits(((k + 1023) as u64) << 52);
     if x < FLOOR_F64 {

@@ -3,6 +3,7 @@
 
 pub mod exp;
 pub mod fresnel;
+pub mod poly;
 pub mod quadrature;
 pub mod rng;
 pub mod sampler;

@@ -7,8 +7,8 @@
 //! integer) and a remainder f = u·4 − q in [−½, ½] (exact: Sterbenz), and r = f·π/2 lies in
 //! [−π/4, π/4], where the Taylor polynomials of sin to r¹⁵ and cos to r¹⁶ are within
 //! r¹⁷/17! < 5·10⁻¹⁷ and r¹⁸/18! < 3·10⁻¹⁸ (|r| ≤ π/4) of the functions: below half an ulp of
-//! results ≥ 2⁻⁵. Evaluated by Estrin's scheme in r² (a short dependency chain), separate
-//! multiplies and adds (no fused multiply-add: the same bits on every x86-64 machine).
+//! results ≥ 2⁻⁵. Evaluated by Estrin's scheme in r² ([`super::poly::estrin`]: a short
+//! dependency chain, no fused multiply-add, the same bits on every x86-64 machine).
 //!
 //! Accuracy: within 1.1 ulp of the exact sin and cos of 2π·u, measured on 20,000 random u
 //! against 200-bit mpmath; the library's `(2π·u).sin_cos()` is off by more near the zeros,
@@ -18,6 +18,9 @@
 
 use std::f64::consts::FRAC_PI_2;
 
+use super::exp::ROUND_F64;
+use super::poly::estrin;
+
 /// (sin 2πu, cos 2πu) for finite `u` (the sampler's u ∈ [0, 1); any finite u is reduced
 /// exactly for |u| < 2⁴⁹).
 #[inline]
@@ -25,25 +28,13 @@ pub fn sin_cos_turns(u: f64) -> (f64, f64) {
     let x = 4.0 * u;
     // The nearest integer (ties to even) by adding and removing 1.5·2⁵² (exact for
     // |x| < 2⁵¹; `f64::round` is a library call on baseline x86-64).
-    let q = (x + ROUND) - ROUND;
+    let q = (x + ROUND_F64) - ROUND_F64;
     let r = (x - q) * FRAC_PI_2;
     let r2 = r * r;
-    let r4 = r2 * r2;
-    let r8 = r4 * r4;
-    // sin r = r·(1 + r²·S(r²)), S's coefficients −1/3!, 1/5!, …, −1/15!.
-    let s01 = S[0] + S[1] * r2;
-    let s23 = S[2] + S[3] * r2;
-    let s45 = S[4] + S[5] * r2;
-    let s67 = S[6];
-    let sp = (s01 + s23 * r4) + (s45 + s67 * r4) * r8;
-    let sin_r = r + r * (r2 * sp);
-    // cos r = 1 + r²·C(r²), C's coefficients −1/2!, 1/4!, …, 1/16!.
-    let c01 = C[0] + C[1] * r2;
-    let c23 = C[2] + C[3] * r2;
-    let c45 = C[4] + C[5] * r2;
-    let c67 = C[6] + C[7] * r2;
-    let cp = (c01 + c23 * r4) + (c45 + c67 * r4) * r8;
-    let cos_r = 1.0 + r2 * cp;
+    // sin r = r·(1 + r²·S(r²)), S's coefficients −1/3!, 1/5!, …, −1/15!; cos r = 1 + r²·C(r²),
+    // C's −1/2!, 1/4!, …, 1/16!.
+    let sin_r = r + r * (r2 * estrin(&S, r2));
+    let cos_r = 1.0 + r2 * estrin(&C, r2);
     // Rotate by q quarter turns without branches (the quadrant of a uniform draw is random):
     // odd q swaps sin and cos; sin is negated for q ≡ 2, 3 and cos for q ≡ 1, 2 (mod 4).
     let qi = q as i64;
@@ -59,8 +50,6 @@ pub fn sin_cos_turns(u: f64) -> (f64, f64) {
         f64::from_bits(b.to_bits() ^ sign_c),
     )
 }
-
-const ROUND: f64 = 6_755_399_441_055_744.0;
 
 /// (−1)^k/(2k + 1)! for k = 1 … 7.
 const S: [f64; 7] = [
