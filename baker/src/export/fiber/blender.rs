@@ -1,7 +1,7 @@
 //! `blender`: a Python script that builds a Principled Hair BSDF (Chiang model) material.
 
 use super::fit::FiberFit;
-use super::summary::{list, summary};
+use super::summary::summary;
 use crate::error::UsageError;
 use crate::export::ExportRequest;
 
@@ -44,10 +44,16 @@ pub fn write_blender(fit: &FiberFit) -> String {
           #   IOR = eta; Absorption Coefficient = sigma_a per unit radius (same chord length);\n\
           #   Offset = -alpha in radians (hair_alpha_angles tilts the other way round).\n";
     s += &format!(
-        "import bpy\n\nMATERIAL = {:?}\nSIGMA_A = ({})\nBETA_M = {:.6}\nBETA_N = {:.6}\n\
-         IOR = {:.6}\nOFFSET_RAD = {:.8}  # alpha = {:.4} deg\n\n",
+        "import bpy\n\nMATERIAL = {:?}\nSIGMA_A = ({})\nBETA_M = {}\nBETA_N = {}\n\
+         IOR = {}\nOFFSET_RAD = {}  # alpha = {:.4} deg\n\n",
         format!("baker {}", fit.variant),
-        list(&p.sigma_a, ", "),
+        // The fit's values as they are (the shortest decimals that read back as the same
+        // doubles), not rounded to 6 decimals: that is 2·10⁻⁵ of β_n = 0.02.
+        p.sigma_a
+            .iter()
+            .map(|x| x.to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
         p.beta_m,
         p.beta_n,
         p.eta,
