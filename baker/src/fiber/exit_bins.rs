@@ -48,12 +48,22 @@ impl ExitBins {
         let (n_theta, n_phi) = (grid.n_theta, grid.n_phi);
         let res = grid.res_deg.to_radians();
         let sin_edges: Vec<f64> = (0..=n_theta)
-            .map(|i| (-std::f64::consts::FRAC_PI_2 + i as f64 * res).sin())
+            .map(|i| grid.theta_lower_rad(i).sin())
             .collect();
-        let row_of = |z: f64| (1..n_theta).filter(|&j| sin_edges[j] <= z).count() as u32;
+        // A cell's row: the interior edges at or below its lower end, counted by one sweep
+        // (cells and edges both ascend).
         let nz = Z_CELLS_PER_ROW * n_theta;
         let z_scale = nz as f64 / 2.0;
-        let z_rows = (0..nz).map(|k| row_of(-1.0 + k as f64 / z_scale)).collect();
+        let mut row = 0;
+        let z_rows = (0..nz)
+            .map(|k| {
+                let z = -1.0 + k as f64 / z_scale;
+                while row + 1 < n_theta && sin_edges[row + 1] <= z {
+                    row += 1;
+                }
+                row as u32
+            })
+            .collect();
         let col_edges: Vec<[f64; 2]> = (0..=n_phi)
             .map(|j| {
                 let (s, c) = (-std::f64::consts::PI + j as f64 * res).sin_cos();
