@@ -178,7 +178,9 @@ impl Channels {
             kind,
             terms,
             step_um,
-            inv_step: 1.0 / step_um,
+            // Nothing absorbs: every channel is the same at any ℓ, so every path reads row 0
+            // (its values are `exact`'s sums, bit for bit), not the exact sums past row 1.
+            inv_step: if mu_max > 0.0 { 1.0 / step_um } else { 0.0 },
             table,
             len,
             tail,
@@ -360,6 +362,27 @@ fn exact(terms: &[(f64, f64)], l: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Without any absorber every path reads the table's first row, which holds `exact`'s
+    /// sums bit for bit (at 0 and far beyond the typical path alike).
+    #[test]
+    fn channels_without_absorption_are_exact_at_any_path() {
+        let lambda: Vec<f64> = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
+        let white = Variant {
+            name: "white".into(),
+            mua_per_um: vec![0.0; lambda.len()],
+        };
+        for kind in [ChannelKind::Rgb, ChannelKind::Spectral] {
+            let ch = Channels::new(std::slice::from_ref(&white), &lambda, kind, 30.0);
+            for l in [0.0, 12.5, 29.9, 30.0, 31.0, 4.0e3, 1e9] {
+                let mut got = vec![f64::NAN; ch.len()];
+                ch.attenuations(l, &mut got);
+                for (c, t) in ch.terms.iter().enumerate() {
+                    assert_eq!(got[c].to_bits(), exact(t, l).to_bits(), "{kind:?} ℓ {l}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn interpolated_channels_match_exact_weights() {

@@ -5,15 +5,18 @@
 /// as `c[2i] + c[2i + 1]·x`, those pairs pair up with x², then x⁴, … (an odd one out passes to
 /// the next level unchanged). Its dependency chain is about 2·log₂ N operations, Horner's
 /// 2·N, so loops of evaluations are not bound by add latency. Separate multiplies and adds (no
-/// fused multiply-add) in a fixed order: the same bits on every x86-64 machine.
+/// fused multiply-add) in a fixed order: the same bits on every x86-64 machine, and in
+/// constant evaluation ([`super::turns`] builds its table with it).
 #[inline(always)]
-pub fn estrin<const N: usize>(c: &[f64; N], x: f64) -> f64 {
+pub const fn estrin<const N: usize>(c: &[f64; N], x: f64) -> f64 {
     let mut v = *c;
     let (mut n, mut p) = (N, x);
     while n > 1 {
         let half = n / 2;
-        for i in 0..half {
+        let mut i = 0;
+        while i < half {
             v[i] = v[2 * i] + v[2 * i + 1] * p;
+            i += 1;
         }
         n = if n % 2 == 1 {
             v[half] = v[n - 1];

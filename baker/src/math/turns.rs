@@ -3,31 +3,68 @@
 //! [`crate::fiber::Surface::scatter`]).
 //!
 //! glibc's `sincos` reduces any double modulo π/2 in extended precision and picks table
-//! entries; an angle in turns needs neither: u·4 splits exactly into the quadrant q (nearest
-//! integer) and a remainder f = u·4 − q in [−½, ½] (exact: Sterbenz), and r = f·π/2 lies in
-//! [−π/4, π/4], where the Taylor polynomials of sin to r¹⁵ and cos to r¹⁶ are within
-//! r¹⁷/17! < 5·10⁻¹⁷ and r¹⁸/18! < 3·10⁻¹⁸ (|r| ≤ π/4) of the functions: below half an ulp of
-//! results ≥ 2⁻⁵. Evaluated by Estrin's scheme in r² ([`super::poly::estrin`]: a short
-//! dependency chain, no fused multiply-add, the same bits on every x86-64 machine).
+//! entries; an angle in turns needs neither. [`sin_cos_turns`] splits 256·u exactly into the
+//! nearest integer k and a remainder f = 256·u − k in [−½, ½] (exact: Sterbenz), reads
+//! sin and cos of the k-th 256th of a turn from a table, and turns them by r = f·2π/256,
+//! |r| ≤ π/256, with the angle-sum formulas: sin(a + r) = sin a·cos r + cos a·sin r and
+//! cos(a + r) = cos a·cos r − sin a·sin r. On so short an interval the Taylor polynomials of
+//! sin r to r⁷ and cos r to r⁶ are within r⁹/9! < 2·10⁻²³ and r⁸/8! < 2·10⁻²⁰ of the
+//! functions. Six multiplies and adds for the polynomials and six for the turn, against the
+//! sixteen-term polynomials of [`sin_cos_quadrant`] (which builds the table, in constant
+//! evaluation, and is exact at the quarter turns: so is the table, and so the result there).
+//! No fused multiply-add: the same bits on every x86-64 machine.
 //!
-//! Accuracy: within 1.1 ulp of the exact sin and cos of 2π·u, measured on 20,000 random u
-//! against 200-bit mpmath; the library's `(2π·u).sin_cos()` is off by more near the zeros,
-//! where the rounding of its argument 2π·u dominates. The unit test holds it within 2 ulp of
-//! the library plus one ulp of the argument. Speed: 11 ns against glibc's 24 ns per call on
-//! the development machine (random u: the quadrant is applied without branches).
+//! Accuracy: within 1.5 ulp (of 1) of [`sin_cos_quadrant`] over 10⁶ random u; the unit test
+//! holds both within 2 ulp of the library plus one ulp of the argument 2π·u. Speed, 2·10⁷
+//! random u in a loop whose sum depends on each result: 6.0 ns per call against 20.6 ns for
+//! [`sin_cos_quadrant`] (validation/bench-runs/2026-12-07-fiber-sincos-table).
 
-use std::f64::consts::FRAC_PI_2;
+use std::f64::consts::{FRAC_PI_2, TAU};
 
 use super::exp::ROUND_F64;
 use super::poly::estrin;
 
+/// Table steps per turn (a power of two: the index wraps by a mask).
+const STEPS: usize = 256;
+
+/// (sin, cos) of k/256 of a turn, k = 0 … 255, by [`sin_cos_quadrant`].
+static TABLE: [[f64; 2]; STEPS] = {
+    let mut t = [[0.0; 2]; STEPS];
+    let mut k = 0;
+    while k < STEPS {
+        let (s, c) = sin_cos_quadrant(k as f64 / STEPS as f64);
+        t[k] = [s, c];
+        k += 1;
+    }
+    t
+};
+
 /// (sin 2πu, cos 2πu) for finite `u` (the sampler's u ∈ [0, 1); any finite u is reduced
-/// exactly for |u| < 2⁴⁹).
+/// exactly for |u| < 2⁴³).
 #[inline]
 pub fn sin_cos_turns(u: f64) -> (f64, f64) {
-    let x = 4.0 * u;
+    let x = STEPS as f64 * u;
     // The nearest integer (ties to even) by adding and removing 1.5·2⁵² (exact for
     // |x| < 2⁵¹; `f64::round` is a library call on baseline x86-64).
+    let q = (x + ROUND_F64) - ROUND_F64;
+    let r = (x - q) * (TAU / STEPS as f64);
+    let r2 = r * r;
+    // Two's complement: the mask is q mod 256 for negative q too.
+    let [s, c] = TABLE[(q as i64 as usize) & (STEPS - 1)];
+    let sin_r = r + r * (r2 * (-1.0 / 6.0 + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5_040.0))));
+    let cos_r = 1.0 + r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0)));
+    (s * cos_r + c * sin_r, c * cos_r - s * sin_r)
+}
+
+/// (sin 2πu, cos 2πu) for finite `u` by quadrants: u·4 splits exactly into the quadrant q
+/// (nearest integer) and a remainder f = u·4 − q in [−½, ½], and r = f·π/2 lies in
+/// [−π/4, π/4], where the Taylor polynomials of sin to r¹⁵ and cos to r¹⁶ are within
+/// r¹⁷/17! < 5·10⁻¹⁷ and r¹⁸/18! < 3·10⁻¹⁸ (|r| ≤ π/4) of the functions: below half an ulp of
+/// results ≥ 2⁻⁵. Evaluated by Estrin's scheme in r² ([`super::poly::estrin`]). Within
+/// 1.1 ulp of the exact values (20,000 random u against 200-bit mpmath). A constant
+/// function: it builds [`sin_cos_turns`]'s table.
+pub const fn sin_cos_quadrant(u: f64) -> (f64, f64) {
+    let x = 4.0 * u;
     let q = (x + ROUND_F64) - ROUND_F64;
     let r = (x - q) * FRAC_PI_2;
     let r2 = r * r;
@@ -39,10 +76,7 @@ pub fn sin_cos_turns(u: f64) -> (f64, f64) {
     // odd q swaps sin and cos; sin is negated for q ≡ 2, 3 and cos for q ≡ 1, 2 (mod 4).
     let qi = q as i64;
     let swap = qi & 1 != 0;
-    let (a, b) = (
-        if swap { cos_r } else { sin_r },
-        if swap { sin_r } else { cos_r },
-    );
+    let (a, b) = if swap { (cos_r, sin_r) } else { (sin_r, cos_r) };
     let sign_s = ((qi as u64 >> 1) & 1) << 63;
     let sign_c = (((qi + 1) as u64 >> 1) & 1) << 63;
     (
@@ -99,16 +133,21 @@ mod tests {
         }
         us.extend([1e-300, 0.999_999_999_999_999_9, -0.3, 7.25, -1e6 - 0.1]);
         for u in us {
-            let (s, c) = sin_cos_turns(u);
             let (s0, c0) = (std::f64::consts::TAU * u).sin_cos();
-            assert!(
-                close(s, s0, u) && close(c, c0, u),
-                "u {u}: {s} {c} vs {s0} {c0}"
-            );
+            for (s, c) in [sin_cos_turns(u), sin_cos_quadrant(u)] {
+                assert!(
+                    close(s, s0, u) && close(c, c0, u),
+                    "u {u}: {s} {c} vs {s0} {c0}"
+                );
+            }
         }
-        assert_eq!(sin_cos_turns(0.0), (0.0, 1.0));
-        assert_eq!(sin_cos_turns(0.25), (1.0, 0.0));
-        assert_eq!(sin_cos_turns(0.5), (-0.0, -1.0));
-        assert_eq!(sin_cos_turns(0.75), (-1.0, 0.0));
+        // Exact at the quarter turns (a zero's sign aside).
+        for f in [sin_cos_turns, sin_cos_quadrant] {
+            assert_eq!(f(0.0), (0.0, 1.0));
+            assert_eq!(f(0.25), (1.0, 0.0));
+            assert_eq!(f(0.5), (0.0, -1.0));
+            assert_eq!(f(0.75), (-1.0, 0.0));
+            assert_eq!(f(-0.25), (-1.0, 0.0));
+        }
     }
 }
