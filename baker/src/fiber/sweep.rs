@@ -143,7 +143,7 @@ impl Channels {
         let mu_min = absorbing().fold(f64::INFINITY, f64::min);
         let n = terms.len();
         let rows_max = (MAX_VALUES / n.max(1)).clamp(4, 2 * MAX_TABLE);
-        let (step_um, len, tail) = if mu_max > 0.0 {
+        let (step_um, inv_step, len, tail) = if mu_max > 0.0 {
             let step = STEP_MU / mu_max;
             let len = ((typical_path_um / step).ceil() as usize + 2).clamp(2, rows_max / 2);
             // Geometric points until every absorbing term is negligible (μa,min·ℓ > 50).
@@ -155,9 +155,11 @@ impl Channels {
             let tail = (1..=k)
                 .map(|j| l0 * (j as f64 * TAIL_RATIO.ln_1p()).exp())
                 .collect();
-            (step, len, tail)
+            (step, 1.0 / step, len, tail)
         } else {
-            (typical_path_um.max(1.0), 2, Vec::new())
+            // Nothing absorbs: every channel is the same at any ℓ, so every path reads row 0
+            // (its values are `exact`'s sums, bit for bit): a step inverse of 0.
+            (typical_path_um.max(1.0), 0.0, 2, Vec::new())
         };
         let points: Vec<f64> = (0..len)
             .map(|i| i as f64 * step_um)
@@ -178,9 +180,7 @@ impl Channels {
             kind,
             terms,
             step_um,
-            // Nothing absorbs: every channel is the same at any ℓ, so every path reads row 0
-            // (its values are `exact`'s sums, bit for bit), not the exact sums past row 1.
-            inv_step: if mu_max > 0.0 { 1.0 / step_um } else { 0.0 },
+            inv_step,
             table,
             len,
             tail,

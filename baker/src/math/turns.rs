@@ -14,10 +14,11 @@
 //! evaluation, and is exact at the quarter turns: so is the table, and so the result there).
 //! No fused multiply-add: the same bits on every x86-64 machine.
 //!
-//! Accuracy: within 1.5 ulp (of 1) of [`sin_cos_quadrant`] over 10⁶ random u; the unit test
-//! holds both within 2 ulp of the library plus one ulp of the argument 2π·u. Speed, 2·10⁷
-//! random u in a loop whose sum depends on each result: 6.0 ns per call against 20.6 ns for
-//! [`sin_cos_quadrant`] (validation/bench-runs/2026-12-07-fiber-sincos-table).
+//! Accuracy: within 2.4 ulp of the exact values (20,000 random u against 200-bit mpmath;
+//! [`sin_cos_quadrant`]: 1.6 ulp); the unit test holds both within 2 ulp of the library plus
+//! one ulp of the argument 2π·u. Speed, 2·10⁷ random u in a loop whose sum depends on each
+//! result: 6.3–6.6 ns per call against 21.2–22.0 ns for [`sin_cos_quadrant`]
+//! (validation/bench-runs/2026-12-07-fiber-sincos-table).
 
 use std::f64::consts::{FRAC_PI_2, TAU};
 
@@ -61,8 +62,8 @@ pub fn sin_cos_turns(u: f64) -> (f64, f64) {
 /// [−π/4, π/4], where the Taylor polynomials of sin to r¹⁵ and cos to r¹⁶ are within
 /// r¹⁷/17! < 5·10⁻¹⁷ and r¹⁸/18! < 3·10⁻¹⁸ (|r| ≤ π/4) of the functions: below half an ulp of
 /// results ≥ 2⁻⁵. Evaluated by Estrin's scheme in r² ([`super::poly::estrin`]). Within
-/// 1.1 ulp of the exact values (20,000 random u against 200-bit mpmath). A constant
-/// function: it builds [`sin_cos_turns`]'s table.
+/// 1.1–1.6 ulp of the exact values (two samples of 20,000 random u against 200-bit mpmath).
+/// A constant function: it builds [`sin_cos_turns`]'s table.
 pub const fn sin_cos_quadrant(u: f64) -> (f64, f64) {
     let x = 4.0 * u;
     let q = (x + ROUND_F64) - ROUND_F64;
