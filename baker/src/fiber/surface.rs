@@ -86,42 +86,31 @@ impl Surface {
         d: [f64; 3],
         nf: [f64; 3],
         inside: bool,
-        mut u: impl FnMut() -> f64,
+        u: impl FnMut() -> f64,
     ) -> Scatter {
+        self.crossing(d, nf, inside).scatter(u)
+    }
+
+    /// The constants of one boundary event, for drawing it many times
+    /// ([`Crossing::scatter`]; the tracer's split events draw it up to 32 times).
+    #[inline]
+    pub fn crossing(&self, d: [f64; 3], nf: [f64; 3], inside: bool) -> Crossing {
         let (n1, n2) = if inside {
             (self.eta, 1.0)
         } else {
             (1.0, self.eta)
         };
-        if self.alpha == 0.0 {
-            return facet(d, nf, n1, n2, u());
+        let (t, b) = basis(nf);
+        Crossing {
+            alpha: self.alpha,
+            d,
+            nf,
+            t,
+            b,
+            n1,
+            n2,
+            e: n1 / n2,
         }
-        let wi = [-d[0], -d[1], -d[2]];
-        let mut m = self.sample_visible(wi, nf, &mut u);
-        let mut wi = wi;
-        for bounce in 0..MAX_CAVITY_BOUNCES {
-            let mut s = facet([-wi[0], -wi[1], -wi[2]], m, n1, n2, u());
-            s.first_facet = bounce == 0;
-            if s.transmitted {
-                if dot(s.dir, nf) < 0.0 {
-                    return s;
-                }
-            } else if dot(s.dir, nf) > 0.0 && u() < g1_vcavity(s.dir, m, nf) {
-                return s;
-            }
-            // Masked: the ray meets the cavity's other facet, the mirror of m about nf.
-            let m2 = axpy(2.0 * dot(m, nf), nf, [-m[0], -m[1], -m[2]]);
-            let next_wi = [-s.dir[0], -s.dir[1], -s.dir[2]];
-            if s.transmitted || dot(next_wi, m2) <= 0.0 {
-                break;
-            }
-            m = m2;
-            wi = next_wi;
-        }
-        let mut s = facet(d, nf, n1, n2, u());
-        s.fallback = true;
-        s.first_facet = false;
-        s
     }
 
     /// Density per steradian of leaving a rough boundary in direction `wo` at the first facet
@@ -182,14 +171,69 @@ impl Surface {
         let t = 1.0 - fresnel::dielectric(1.0, self.eta, a).0;
         p_vis * t * self.eta * self.eta * (-wom) / h2
     }
+}
+
+/// One boundary event's constants ([`Surface::crossing`]): the photon's direction, the mean
+/// normal facing it and its basis, the indices on either side and their ratio. Each
+/// [`Crossing::scatter`] is one independent draw of the event, the same operations as a fresh
+/// [`Surface::scatter`], so results do not depend on how often the event is drawn.
+#[derive(Debug, Clone, Copy)]
+pub struct Crossing {
+    alpha: f64,
+    d: [f64; 3],
+    nf: [f64; 3],
+    /// Tangent and bitangent of `nf` ([`basis`]).
+    t: [f64; 3],
+    b: [f64; 3],
+    /// From index n1 into n2, e = n1/n2.
+    n1: f64,
+    n2: f64,
+    e: f64,
+}
+
+impl Crossing {
+    /// One draw of the event: the V-cavity walk of [`Surface`]'s module docs. `u` gives
+    /// uniform numbers in (0, 1).
+    #[inline]
+    pub fn scatter(&self, mut u: impl FnMut() -> f64) -> Scatter {
+        let (d, nf) = (self.d, self.nf);
+        if self.alpha == 0.0 {
+            return self.facet(d, nf, u());
+        }
+        let wi = [-d[0], -d[1], -d[2]];
+        let mut m = self.sample_visible(wi, &mut u);
+        let mut wi = wi;
+        for bounce in 0..MAX_CAVITY_BOUNCES {
+            let mut s = self.facet([-wi[0], -wi[1], -wi[2]], m, u());
+            s.first_facet = bounce == 0;
+            if s.transmitted {
+                if dot(s.dir, nf) < 0.0 {
+                    return s;
+                }
+            } else if dot(s.dir, nf) > 0.0 && g1_passes(s.dir, m, nf, u()) {
+                return s;
+            }
+            // Masked: the ray meets the cavity's other facet, the mirror of m about nf.
+            let m2 = axpy(2.0 * dot(m, nf), nf, [-m[0], -m[1], -m[2]]);
+            let next_wi = [-s.dir[0], -s.dir[1], -s.dir[2]];
+            if s.transmitted || dot(next_wi, m2) <= 0.0 {
+                break;
+            }
+            m = m2;
+            wi = next_wi;
+        }
+        let mut s = self.facet(d, nf, u());
+        s.fallback = true;
+        s.first_facet = false;
+        s
+    }
 
     /// A facet normal of the V-cavity distribution visible from `wi` (Heitz & d'Eon 2014 §5):
     /// m from D(m)(m·n), then m or its mirror m′ with probabilities ∝ ⟨wi·m⟩, ⟨wi·m′⟩.
     #[inline]
-    fn sample_visible(&self, wi: [f64; 3], n: [f64; 3], u: &mut impl FnMut() -> f64) -> [f64; 3] {
-        let (cos_t, (sp, cp)) = sample_beckmann(self.alpha, u(), u());
-        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        let (t, b) = basis(n);
+    fn sample_visible(&self, wi: [f64; 3], u: &mut impl FnMut() -> f64) -> [f64; 3] {
+        let (n, t, b) = (self.nf, self.t, self.b);
+        let (cos_t, sin_t, (sp, cp)) = sample_beckmann(self.alpha, u(), u());
         let m = [
             sin_t * cp * t[0] + sin_t * sp * b[0] + cos_t * n[0],
             sin_t * cp * t[1] + sin_t * sp * b[1] + cos_t * n[1],
@@ -198,10 +242,27 @@ impl Surface {
         let m2 = axpy(2.0 * cos_t, n, [-m[0], -m[1], -m[2]]);
         let a = dot(wi, m).max(0.0);
         let a2 = dot(wi, m2).max(0.0);
-        if u() * (a + a2) < a2 {
-            m2
-        } else {
-            m
+        // A select, not a branch: the choice is a coin toss for a slightly rough surface.
+        let pick = u() * (a + a2) < a2;
+        [0, 1, 2].map(|i| select(pick, m2[i], m[i]))
+    }
+
+    /// Reflection or refraction of direction `d` at a smooth facet with normal `m` facing it
+    /// (d·m < 0), chosen by the unpolarised Fresnel reflectance with the uniform number `u`.
+    #[inline]
+    fn facet(&self, d: [f64; 3], m: [f64; 3], u: f64) -> Scatter {
+        let cos_i = -dot(d, m);
+        let (reflected, cos_t) = fresnel::reflects(self.n1, self.n2, self.e, cos_i, u);
+        let transmitted = !reflected;
+        Scatter {
+            dir: if transmitted {
+                refract(d, m, self.e, cos_i, cos_t)
+            } else {
+                reflect(d, m, cos_i)
+            },
+            transmitted,
+            fallback: false,
+            first_facet: true,
         }
     }
 }
@@ -369,12 +430,15 @@ impl FacetPdf {
 
 /// A Beckmann facet normal with pdf D(m)(m·n) dω: tan²θm = −α² ln u1 (the slopes are
 /// Gaussian, so tan²θm is exponential with mean α²; Walter et al. 2007, Eq. 28), φm = 2π u2.
-/// Returns (cos θm, (sin φm, cos φm)), the azimuth's by [`sin_cos_turns`] (every boundary draw
-/// takes one). Its density over θm is [`beckmann_pdf_theta`].
+/// Returns (cos θm, sin θm, (sin φm, cos φm)), the azimuth's by [`sin_cos_turns`] (every
+/// boundary draw takes one). sin θm = tan θm·cos θm: its square root runs beside cos θm's
+/// instead of after it, and keeps its relative accuracy near the normal, where √(1 − cos²θm)
+/// cancels. Its density over θm is [`beckmann_pdf_theta`].
 #[inline]
-pub fn sample_beckmann(alpha: f64, u1: f64, u2: f64) -> (f64, (f64, f64)) {
+pub fn sample_beckmann(alpha: f64, u1: f64, u2: f64) -> (f64, f64, (f64, f64)) {
     let tan2 = -alpha * alpha * u1.ln();
-    (1.0 / (1.0 + tan2).sqrt(), sin_cos_turns(u2))
+    let cos_t = 1.0 / (1.0 + tan2).sqrt();
+    (cos_t, tan2.sqrt() * cos_t, sin_cos_turns(u2))
 }
 
 /// Density over θm of [`sample_beckmann`]'s normals, D(m) cos θm sin θm · 2π with the
@@ -400,24 +464,21 @@ pub fn g1_vcavity(w: [f64; 3], m: [f64; 3], n: [f64; 3]) -> f64 {
     (2.0 * dot(n, m) * wn / wm).min(1.0)
 }
 
-/// Reflection or refraction of direction `d` at a smooth facet with normal `m` facing it
-/// (d·m < 0), from index n1 into n2, chosen by the unpolarised Fresnel reflectance with the
-/// uniform number `u`.
+/// Whether a uniform number `u` in [0, 1) passes the V-cavity's masking, u < G1(w, m):
+/// u·(w·m) < 2 (n·m)(n·w) where w·m and n·w are positive ([`g1_vcavity`] without its
+/// division; u < 1 makes its min(1, ·) irrelevant).
 #[inline]
-fn facet(d: [f64; 3], m: [f64; 3], n1: f64, n2: f64, u: f64) -> Scatter {
-    let cos_i = -dot(d, m);
-    let (r, cos_t) = fresnel::dielectric(n1, n2, cos_i);
-    let transmitted = u >= r;
-    Scatter {
-        dir: if transmitted {
-            refract(d, m, n1 / n2, cos_i, cos_t)
-        } else {
-            reflect(d, m, cos_i)
-        },
-        transmitted,
-        fallback: false,
-        first_facet: true,
-    }
+fn g1_passes(w: [f64; 3], m: [f64; 3], n: [f64; 3], u: f64) -> bool {
+    let wm = dot(w, m);
+    let wn = dot(w, n);
+    wm > 0.0 && wn > 0.0 && u * wm < 2.0 * dot(n, m) * wn
+}
+
+/// `b` where `pick`, else `a`, as a bitwise blend (no branch to mispredict).
+#[inline(always)]
+fn select(pick: bool, b: f64, a: f64) -> f64 {
+    let mask = (pick as u64).wrapping_neg();
+    f64::from_bits((b.to_bits() & mask) | (a.to_bits() & !mask))
 }
 
 /// Direction `d` mirrored at a facet with normal `m` facing it, cos θi = `cos_i` = −d·m.
@@ -428,14 +489,18 @@ pub(crate) fn reflect(d: [f64; 3], m: [f64; 3], cos_i: f64) -> [f64; 3] {
 
 /// Direction `d` refracted through a facet with normal `m` facing it, relative index
 /// `e` = n1/n2, cos θi = `cos_i`, cos θt = `cos_t` (from [`fresnel::dielectric`]): Snell in
-/// vector form, renormalised against rounding.
+/// vector form, renormalised against rounding (a Newton step: d and m must be unit vectors).
 #[inline]
 pub(crate) fn refract(d: [f64; 3], m: [f64; 3], e: f64, cos_i: f64, cos_t: f64) -> [f64; 3] {
-    normalize([
+    let v = [
         e * d[0] + (e * cos_i - cos_t) * m[0],
         e * d[1] + (e * cos_i - cos_t) * m[1],
         e * d[2] + (e * cos_i - cos_t) * m[2],
-    ])
+    ];
+    // |v|² = 1 + ε with ε of a few ulps for unit d and m: one Newton step for 1/√x from 1,
+    // (3 − x)/2, leaves 3ε²/8 (far below an ulp) and needs neither a square root nor a division.
+    let k = 0.5 * (3.0 - dot(v, v));
+    [v[0] * k, v[1] * k, v[2] * k]
 }
 
 #[cfg(test)]
@@ -470,7 +535,7 @@ mod tests {
             let alpha = beta_deg.to_radians().tan();
             let (mut theta, mut phi) = (Vec::new(), Vec::new());
             for _ in 0..200_000 {
-                let (c, (sp, cp)) =
+                let (c, _, (sp, cp)) =
                     sample_beckmann(alpha, uniform(rng.next_u64()), uniform(rng.next_u64()));
                 theta.push(c.acos());
                 phi.push(sp.atan2(cp).rem_euclid(std::f64::consts::TAU));

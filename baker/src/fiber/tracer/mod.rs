@@ -21,6 +21,7 @@ use rayon::prelude::*;
 
 use super::exit_bins::ExitBins;
 use super::lobe::{Event, Lobe, LobeGrid};
+use super::surface::Crossing;
 use super::tally::DirectionTally;
 use super::{Fiber, Section, Surface};
 use crate::math::rng::batch_rng;
@@ -120,6 +121,30 @@ struct Ray {
     period: i64,
     /// Weight of the branch (1 for an unsplit photon).
     w: f64,
+}
+
+/// A boundary event met by a ray ([`Setup::boundary`]): its constants and the side it is met
+/// from.
+#[derive(Clone, Copy)]
+struct Boundary {
+    crossing: Crossing,
+    from_inside: bool,
+}
+
+impl Boundary {
+    /// One draw of the event: the new direction, whether the fallback was used, whether the
+    /// photon is now inside, and whether it left the cavity at its first facet
+    /// ([`super::surface::Scatter::first_facet`]).
+    #[inline]
+    fn draw(&self, u: &mut impl FnMut() -> f64) -> ([f64; 3], bool, bool, bool) {
+        let s = self.crossing.scatter(&mut *u);
+        (
+            s.dir,
+            s.fallback,
+            self.from_inside != s.transmitted,
+            s.first_facet,
+        )
+    }
 }
 
 /// The part of a launch that depends on its azimuth only ([`Setup::beam_at`]).
@@ -502,8 +527,9 @@ impl<'a> Setup<'a> {
                 _ => draws.at(ray.inside),
             };
             let ev = ev.map(|(lobe, _)| lobe);
+            let event = self.boundary(ray.dir, n_out);
             if split <= 1 {
-                let s = self.boundary(ray.dir, n_out, &mut || u.uniform());
+                let s = event.draw(&mut || u.uniform());
                 st.fallbacks += s.1 as u32;
                 if !s.2 && free {
                     // Outward through the convex hull: no ray query needed to know it leaves.
@@ -533,7 +559,7 @@ impl<'a> Setup<'a> {
                 if k > 0 {
                     u.leave_points();
                 }
-                let s = self.boundary(ray.dir, n_out, &mut || u.uniform());
+                let s = event.draw(&mut || u.uniform());
                 st.fallbacks += s.1 as u32;
                 if s.2 {
                     m += 1;
@@ -667,30 +693,21 @@ impl<'a> Setup<'a> {
         Some(([hit.n[0], hit.n[1], 0.0], Some(hit.id), 0))
     }
 
-    /// A boundary event at outward normal `n_out`: returns the new direction, whether the
-    /// fallback was used, whether the photon is now inside, and whether it left the cavity at
-    /// its first facet ([`super::surface::Scatter::first_facet`]). The side is read from the
-    /// direction, so a numerical slip cannot desynchronise it.
+    /// A boundary event at outward normal `n_out`, to be drawn once or many times
+    /// ([`Boundary::draw`]). The side is read from the direction, so a numerical slip cannot
+    /// desynchronise it.
     #[inline]
-    fn boundary(
-        &self,
-        dir: [f64; 3],
-        n_out: [f64; 3],
-        u: &mut impl FnMut() -> f64,
-    ) -> ([f64; 3], bool, bool, bool) {
+    fn boundary(&self, dir: [f64; 3], n_out: [f64; 3]) -> Boundary {
         let from_inside = dot3(dir, n_out) > 0.0;
         let nf = if from_inside {
             [-n_out[0], -n_out[1], -n_out[2]]
         } else {
             n_out
         };
-        let s = self.surface.scatter(dir, nf, from_inside, &mut *u);
-        (
-            s.dir,
-            s.fallback,
-            from_inside != s.transmitted,
-            s.first_facet,
-        )
+        Boundary {
+            crossing: self.surface.crossing(dir, nf, from_inside),
+            from_inside,
+        }
     }
 
     /// Moves a ray along a fiber with cuticle scales (see [`super::Cuticle`]) period by period

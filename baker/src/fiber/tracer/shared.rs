@@ -155,12 +155,13 @@ impl Setup<'_> {
         let (mut m, mut chosen) = (0u32, None);
         let mut first = true;
         for (k, s) in group.iter().enumerate() {
+            let event = s.boundary(dir[k], n_out);
             for _ in 0..per {
                 if !first {
                     u.leave_points();
                 }
                 first = false;
-                let o = s.boundary(dir[k], n_out, &mut || u.uniform());
+                let o = event.draw(&mut || u.uniform());
                 stats[k].fallbacks += o.1 as u32;
                 if o.2 {
                     m += 1;
