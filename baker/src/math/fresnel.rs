@@ -98,18 +98,15 @@ pub fn dielectric_mitsuba(cos_theta_i: f64, eta: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::rng::{batch_rng, uniform};
+    use rand_core::Rng;
 
     #[test]
     fn reflects_is_the_reflectance_draw() {
-        // Against `u < R` over random cosines and numbers, both sides of every interface; a
-        // planted slip (a missing factor 2, B and D swapped) disagrees on thousands.
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            (x >> 11) as f64 / (1u64 << 53) as f64
-        };
+        // Against `u < R` over random cosines and numbers, both sides of every interface (a
+        // planted slip, the factor 2 dropped, fails it).
+        let mut rng = batch_rng(7, 0);
+        let mut next = || uniform(rng.next_u64());
         let mut near = 0;
         for (ni, nt) in [(1.0, 1.53), (1.53, 1.0), (1.0, 1.33), (1.635, 1.0)] {
             for _ in 0..200_000 {
