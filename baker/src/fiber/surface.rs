@@ -92,7 +92,8 @@ impl Surface {
     }
 
     /// The constants of one boundary event, for drawing it many times
-    /// ([`Crossing::scatter`]; the tracer's split events draw it up to 32 times).
+    /// ([`Crossing::scatter`]; a split event of the tracer draws it `split` or `exit_draws`
+    /// times).
     #[inline]
     pub fn crossing(&self, d: [f64; 3], nf: [f64; 3], inside: bool) -> Crossing {
         let (n1, n2) = if inside {
