@@ -253,7 +253,7 @@ impl Crossing {
     #[inline]
     fn facet(&self, d: [f64; 3], m: [f64; 3], u: f64) -> Scatter {
         let cos_i = -dot(d, m);
-        let (reflected, cos_t) = fresnel::reflects(self.n1, self.n2, self.e, cos_i, u);
+        let (reflected, cos_t) = fresnel::reflects(self.n1, self.n2, cos_i, u);
         let transmitted = !reflected;
         Scatter {
             dir: if transmitted {
