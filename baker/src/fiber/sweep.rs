@@ -7,24 +7,34 @@
 //! CIE 1931 observer folded into one weight per wavelength, [`crate::spectral::ColourMap`]).
 //!
 //! Evaluating hundreds of exponentials per exiting photon would cost more than the walk, so
-//! every channel is tabulated once over ℓ and linearly interpolated (one fused row of all
-//! channels per grid point). Linear interpolation of exp(−μa ℓ) over a step Δ errs by at most
-//! (μa Δ)²/8 of its value, so every step keeps μa·Δ ≤ 0.02 (≤ 5·10⁻⁵) for each term that
-//! matters there:
-//! - up to about 16 bounding diameters the grid is uniform with Δ = 0.02/μa,max;
-//! - beyond, it is geometric, Δ = ρ·ℓ with ρ = 0.02/50: a term with μa·ℓ ≤ 50 has
-//!   μa·Δ ≤ 0.02, and one with μa·ℓ > 50 is below e⁻⁵⁰ < 2⁻⁷² of its coefficient at both ends
-//!   of the step (so is its interpolant). Long internal trapping paths (5 % of a dyed silk
-//!   sweep's exits) are thus looked up, not evaluated term by term;
+//! every channel is tabulated once over ℓ, with its exact derivative (Σ −μa·c·exp(−μa ℓ)),
+//! and interpolated by the cubic Hermite polynomial between two grid points (one fused row of
+//! all channels' values and derivatives per grid point). The cubic Hermite interpolant of
+//! g(ℓ) over a step Δ errs by at most Δ⁴/384 · max|g⁗| (Burden & Faires, *Numerical
+//! Analysis*, Thm. 3.9 with two double nodes); for one term exp(−μa ℓ) that is
+//! (μa Δ)⁴/384 of its value at the step's start, so every step keeps μa·Δ ≤ 0.25 for each
+//! term that matters there (≤ 1.02·10⁻⁵ of the term, 1.3·10⁻⁵ of its value anywhere in the
+//! step; linear interpolation needed μa·Δ ≤ 0.02 for 5·10⁻⁵, 12.5× the rows):
+//! - up to about 16 bounding diameters the grid is uniform with Δ = 0.25/μa,max;
+//! - beyond, it is geometric, Δ = ρ·ℓ with ρ = 0.25/50: a term with μa·ℓ ≤ 50 has
+//!   μa·Δ ≤ 0.25, and one with μa·ℓ > 50 is below e⁻⁵⁰ < 2⁻⁷² of its coefficient at both ends
+//!   of the step, its derivative below 50/ℓ of that (so is its interpolant). Long internal
+//!   trapping paths (5 % of a dyed silk sweep's exits) are thus looked up, not evaluated
+//!   term by term;
 //! - paths beyond both (a few hundred diameters; the table is bounded) are evaluated exactly.
 //!
 //! The table (up to 16,384 rows) is built once per bake, its rows in parallel; a variant's R,
 //! G and B share its μa(λ), so each row evaluates each variant's exponentials once, in a
 //! loop that vectorises ([`exp_neg_f64`]), and sums up to four channels side by side. A
-//! 20-variant RGB polyester sweep's table (12,437 rows × 60 channels) took 33 ms of wall time
-//! with one libm `exp` per term and channel on one thread, 44–49 ms of CPU (23–30 ms wall on
-//! two threads) with the shared exponentials, and 25 ms of CPU (13 ms wall) now
-//! (validation/bench-runs/2026-12-06-fiber-sweep-table).
+//! 20-variant RGB polyester sweep's table (12,437 rows × 60 channels, linear then) took 33 ms
+//! of wall time with one libm `exp` per term and channel on one thread, 44–49 ms of CPU
+//! (23–30 ms wall on two threads) with the shared exponentials, and 25 ms of CPU (13 ms wall)
+//! with the loop that vectorises (validation/bench-runs/2026-12-06-fiber-sweep-table). The
+//! cubic grid has a twelfth of the points, each row twice as wide: the 20-variant cotton
+//! sweep's uniform part, which most exits read, is 914 rows (877 kB, within the core's 1 MiB
+//! L2 cache) where the linear one was 8,192 rows (3.9 MB, read from L3 at each exit), and
+//! linear interpolation's overestimate of the convex exp(−μa ℓ), up to 5·10⁻⁵ of a channel,
+//! is now ≤ 1.3·10⁻⁵ (validation/bench-runs/2026-12-07-fiber-sweep-hermite).
 //!
 //! Cost: each exiting photon still adds one row of all channels, so a wide sweep costs more
 //! than a single variant (measured: 20 variants × RGB of silk at 6°, 16,384 photons per
@@ -59,10 +69,12 @@ pub enum ChannelKind {
 const NEGLIGIBLE_MU_L: f64 = 50.0;
 /// Largest number of ℓ grid points of each part of the table (uniform, geometric).
 const MAX_TABLE: usize = 8192;
-/// Largest number of values (grid points × channels) of the whole table: 64 MiB of f64.
+/// Largest number of values (grid points × channels × 2: value and derivative) of the whole
+/// table: 64 MiB of f64.
 const MAX_VALUES: usize = 1 << 23;
-/// Largest μa·Δ of a step for a term that matters (interpolation error ≤ STEP_MU²/8).
-const STEP_MU: f64 = 0.02;
+/// Largest μa·Δ of a step for a term that matters (interpolation error ≤ STEP_MU⁴/384 of
+/// the term at the step's start).
+const STEP_MU: f64 = 0.25;
 /// Relative step ρ of the geometric part: STEP_MU / NEGLIGIBLE_MU_L.
 const TAIL_RATIO: f64 = STEP_MU / NEGLIGIBLE_MU_L;
 
@@ -78,8 +90,8 @@ pub struct Channels {
     /// ℓ step and its inverse, µm.
     step_um: f64,
     inv_step: f64,
-    /// `(len + tail.len()) × n` values; row i < len holds every channel at ℓ = i·step, row
-    /// len + j at ℓ = tail[j].
+    /// `(len + tail.len()) × 2n` values; row i < len holds every channel's value, then every
+    /// channel's derivative over ℓ (per µm), at ℓ = i·step, row len + j at ℓ = tail[j].
     table: Vec<f64>,
     len: usize,
     /// ℓ of the geometric part's points, µm: tail[j] = (len − 1)·step·(1 + ρ)^(j + 1).
@@ -99,6 +111,7 @@ impl std::fmt::Debug for Channels {
             .field("len", &self.len)
             .field("tail_points", &self.tail.len())
             .field("tail_ratio", &TAIL_RATIO)
+            .field("interpolation", &"cubic Hermite")
             .finish()
     }
 }
@@ -142,7 +155,7 @@ impl Channels {
         let mu_max = absorbing().fold(0.0f64, f64::max);
         let mu_min = absorbing().fold(f64::INFINITY, f64::min);
         let n = terms.len();
-        let rows_max = (MAX_VALUES / n.max(1)).clamp(4, 2 * MAX_TABLE);
+        let rows_max = (MAX_VALUES / (2 * n).max(1)).clamp(4, 2 * MAX_TABLE);
         let (step_um, inv_step, len, tail) = if mu_max > 0.0 {
             let step = STEP_MU / mu_max;
             let len = ((typical_path_um / step).ceil() as usize + 2).clamp(2, rows_max / 2);
@@ -165,11 +178,11 @@ impl Channels {
             .map(|i| i as f64 * step_um)
             .chain(tail.iter().copied())
             .collect();
-        let mut table = vec![0.0; points.len() * n];
+        let mut table = vec![0.0; points.len() * 2 * n];
         if n > 0 {
             let groups = Group::of(&terms);
             table
-                .par_chunks_mut(n)
+                .par_chunks_mut(2 * n)
                 .zip(&points)
                 .for_each_init(Vec::new, |e, (row, &l)| fill_row(&groups, l, row, e));
         }
@@ -204,32 +217,32 @@ impl Channels {
     /// Every channel's weight at path `path_um`, into `out`.
     #[inline]
     pub fn attenuations(&self, path_um: f64, out: &mut [f64]) {
-        let n = self.terms.len();
         let x = path_um * self.inv_step;
-        let (i, f) = if x + 1.0 < self.len as f64 {
+        let (i, t, h) = if x + 1.0 < self.len as f64 {
             let i = x as usize;
-            (i, x - i as f64)
-        } else if let Some((j, f)) = self.in_tail(path_um) {
-            (self.len - 1 + j, f)
+            (i, x - i as f64, self.step_um)
+        } else if let Some((j, t, h)) = self.in_tail(path_um) {
+            (self.len - 1 + j, t, h)
         } else {
             for (o, t) in out.iter_mut().zip(&self.terms) {
                 *o = exact(t, path_um);
             }
             return;
         };
-        let (a, b) = (
-            &self.table[i * n..(i + 1) * n],
-            &self.table[(i + 1) * n..(i + 2) * n],
-        );
-        for ((o, &a), &b) in out.iter_mut().zip(a).zip(b) {
-            *o = a + f * (b - a);
+        let n = self.terms.len();
+        let rows = &self.table[2 * i * n..2 * (i + 2) * n];
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (checked above).
+            return unsafe { hermite_avx2(rows, t, h, out) };
         }
+        hermite(rows, t, h, out)
     }
 
     /// The geometric part's step holding `path_um` (0: from the uniform part's last point to
-    /// tail[0]) and the fraction along it; `None` beyond the table.
+    /// tail[0]), the fraction along it and its length; `None` beyond the table.
     #[inline]
-    fn in_tail(&self, path_um: f64) -> Option<(usize, f64)> {
+    fn in_tail(&self, path_um: f64) -> Option<(usize, f64, f64)> {
         let l0 = (self.len - 1) as f64 * self.step_um;
         let last = *self.tail.last()?;
         if !(path_um >= l0 && path_um < last) {
@@ -246,13 +259,37 @@ impl Channels {
             j += 1;
         }
         let (a, b) = (at(j), at(j + 1));
-        Some((j, (path_um - a) / (b - a)))
+        Some((j, (path_um - a) / (b - a), b - a))
     }
 
     /// Step of the path-length grid, µm.
     pub fn step_um(&self) -> f64 {
         self.step_um
     }
+}
+
+/// The cubic Hermite interpolant at fraction `t` of a step of length `h` µm, per channel, from
+/// the step's two rows (`rows`: values then derivatives at its start, then at its end):
+/// g(t) = h₀₀ g₀ + h₀₁ g₁ + h·(h₁₀ g′₀ + h₁₁ g′₁) with the Hermite basis h₀₀ = (1 + 2t)(1 − t)²,
+/// h₀₁ = t²(3 − 2t), h₁₀ = t(1 − t)², h₁₁ = −t²(1 − t). At t = 0 it is g₀ exactly.
+#[inline(always)]
+fn hermite(rows: &[f64], t: f64, h: f64, out: &mut [f64]) {
+    let n = out.len();
+    let s = 1.0 - t;
+    let (h00, h01) = ((1.0 + 2.0 * t) * s * s, t * t * (3.0 - 2.0 * t));
+    let (h10, h11) = (h * t * s * s, -h * t * t * s);
+    let (v0, rest) = rows.split_at(n);
+    let (d0, rest) = rest.split_at(n);
+    let (v1, d1) = rest.split_at(n);
+    for ((((o, &v0), &d0), &v1), &d1) in out.iter_mut().zip(v0).zip(d0).zip(v1).zip(d1) {
+        *o = h00 * v0 + h01 * v1 + (h10 * d0 + h11 * d1);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn hermite_avx2(rows: &[f64], t: f64, h: f64, out: &mut [f64]) {
+    hermite(rows, t, h, out)
 }
 
 /// Consecutive channels whose terms share one list of μa (a variant's R, G and B): each row
@@ -293,8 +330,9 @@ impl Group {
 }
 
 /// One row of the table: every channel at path `l` µm, each the same sum of the same products
-/// [`exact`] forms (so the same bits), with each group's attenuations evaluated once, in a
-/// loop that vectorises (4 lanes under AVX2, 2 otherwise; the same IEEE operations, no fused
+/// [`exact`] forms (so the same bits), then every channel's derivative over ℓ (the sum of
+/// c·(−μa·exp(−μa ℓ))), with each group's attenuations evaluated once, in a loop that
+/// vectorises (4 lanes under AVX2, 2 otherwise; the same IEEE operations, no fused
 /// multiply-add, so the same bits on every x86-64).
 /// `e` holds a group's attenuations (reused from row to row).
 fn fill_row(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
@@ -314,29 +352,40 @@ fn fill_row_avx2(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
 
 #[inline(always)]
 fn fill_row_in(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
+    let n = row.len() / 2;
+    let (values, slopes) = row.split_at_mut(n);
     for g in groups {
         // A plain loop over slices, not `extend` (whose fold was compiled apart, outside
         // the AVX2 function, and ran in 2 lanes).
-        e.resize(g.mua_per_um.len(), 0.0);
-        for (e, &m) in e.iter_mut().zip(&g.mua_per_um) {
+        let k = g.mua_per_um.len();
+        e.resize(2 * k, 0.0);
+        let (e, de) = e.split_at_mut(k);
+        for ((e, de), &m) in e.iter_mut().zip(de.iter_mut()).zip(&g.mua_per_um) {
             *e = attenuation(m * l);
+            *de = -m * *e;
         }
-        // Up to four channels at once: each channel's sum runs in the same order from −0.0
-        // as `exact`'s `sum()` (the same bits), and the four independent chains overlap
-        // instead of waiting on one add after another.
-        let mut out = row[g.first..g.first + g.coef.len()].chunks_mut(4);
-        for (coef, out) in g.coef.chunks(4).zip(&mut out) {
-            // A short chunk repeats its first channel in the unused lanes (not stored).
-            let c: [&[f64]; 4] = std::array::from_fn(|j| &coef[j.min(coef.len() - 1)][..e.len()]);
-            let mut acc = [-0.0_f64; 4];
-            for (t, &e) in e.iter().enumerate() {
-                acc[0] += c[0][t] * e;
-                acc[1] += c[1][t] * e;
-                acc[2] += c[2][t] * e;
-                acc[3] += c[3][t] * e;
-            }
-            out.copy_from_slice(&acc[..out.len()]);
+        sum_channels(g, e, &mut values[g.first..g.first + g.coef.len()]);
+        sum_channels(g, de, &mut slopes[g.first..g.first + g.coef.len()]);
+    }
+}
+
+/// Σ_t coef[c][t]·e[t] for each channel c of group `g`, into `out`.
+#[inline(always)]
+fn sum_channels(g: &Group, e: &[f64], out: &mut [f64]) {
+    // Up to four channels at once: each channel's sum runs in the same order from −0.0 as
+    // `exact`'s `sum()` (the same bits), and the four independent chains overlap instead of
+    // waiting on one add after another.
+    for (coef, out) in g.coef.chunks(4).zip(out.chunks_mut(4)) {
+        // A short chunk repeats its first channel in the unused lanes (not stored).
+        let c: [&[f64]; 4] = std::array::from_fn(|j| &coef[j.min(coef.len() - 1)][..e.len()]);
+        let mut acc = [-0.0_f64; 4];
+        for (t, &e) in e.iter().enumerate() {
+            acc[0] += c[0][t] * e;
+            acc[1] += c[1][t] * e;
+            acc[2] += c[2][t] * e;
+            acc[3] += c[3][t] * e;
         }
+        out.copy_from_slice(&acc[..out.len()]);
     }
 }
 
@@ -384,6 +433,52 @@ mod tests {
         }
     }
 
+    /// Every channel, at 20,000 paths through the uniform and the geometric part, within the
+    /// cubic Hermite bound of the module's docs: 1.3·10⁻⁵ of Σ|c|·exp(−μa ℓ) over its terms
+    /// (of its value for a wavelength). Linear interpolation on the same grid errs by up to
+    /// (0.25)²/8 = 8·10⁻³, a wrong derivative by more: either fails it.
+    #[test]
+    fn hermite_channels_within_their_bound() {
+        let lambda: Vec<f64> = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
+        let v = |name: &str, k: f64| Variant {
+            name: name.into(),
+            mua_per_um: lambda
+                .iter()
+                .map(|l| k * (1.0 + ((l - 400.0) / 50.0).sin().abs()))
+                .collect(),
+        };
+        let vars = [v("light", 0.002), v("deep", 0.05)];
+        for kind in [ChannelKind::Rgb, ChannelKind::Spectral] {
+            let ch = Channels::new(&vars, &lambda, kind, 40.0);
+            let end = *ch.tail.last().unwrap();
+            let mut got = vec![f64::NAN; ch.len()];
+            let mut worst = 0.0f64;
+            for k in 0..20_000 {
+                // Geometrically spaced from 0.01 µm to the table's end.
+                let l = 0.01 * (end / 0.01).powf(k as f64 / 20_000.0);
+                ch.attenuations(l, &mut got);
+                for (c, t) in ch.terms.iter().enumerate() {
+                    // Plus e⁻⁵⁰ of each coefficient: a term is cut to 0 at a grid point past
+                    // μa·ℓ = 50, however large that makes its own relative error.
+                    let scale: f64 = t.iter().map(|&(m, k)| k.abs() * (-m * l).exp()).sum();
+                    let cut: f64 = t
+                        .iter()
+                        .map(|&(_, k)| k.abs() * (-NEGLIGIBLE_MU_L).exp())
+                        .sum();
+                    let excess = ((got[c] - exact(t, l)).abs() - 2.0 * cut).max(0.0);
+                    let err = if excess > 0.0 { excess / scale } else { 0.0 };
+                    worst = worst.max(err);
+                    assert!(
+                        err <= 1.3e-5,
+                        "{kind:?} ℓ {l} channel {c}: relative error {err}"
+                    );
+                }
+            }
+            // The bound is close to reached, so the grid is no finer than it needs to be.
+            assert!(worst > 2e-6, "{kind:?}: worst {worst}");
+        }
+    }
+
     #[test]
     fn interpolated_channels_match_exact_weights() {
         let lambda: Vec<f64> = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
@@ -397,12 +492,12 @@ mod tests {
         let vars = [v("white", 0.0), v("light", 0.001), v("deep", 0.04)];
         for kind in [ChannelKind::Rgb, ChannelKind::Spectral] {
             let ch = Channels::new(&vars, &lambda, kind, 300.0);
-            // The uniform part (to 300 µm), the geometric part (to 26 × 300 µm here: its
-            // 8,192 points stop short of the light dye's e⁻⁵⁰), and beyond (exact).
+            // The uniform part (to 300 µm), the geometric part (to the light dye's e⁻⁵⁰ at
+            // 50 / 0.001 µm), and beyond (exact).
             assert!(ch.in_tail(299.0).is_none() && ch.in_tail(2.0e5).is_none());
-            assert!(ch.in_tail(300.4).is_some() && ch.in_tail(7.5e3).is_some());
+            assert!(ch.in_tail(310.0).is_some() && ch.in_tail(7.5e3).is_some());
             for &l in &[
-                0.0, 0.37, 5.0, 42.4, 299.0, 300.4, 1500.0, 7.5e3, 2.0e5, 1e9,
+                0.0, 0.37, 5.0, 42.4, 299.0, 310.0, 1500.0, 7.5e3, 2.0e5, 1e9,
             ] {
                 let mut got = vec![f64::NAN; ch.len()];
                 ch.attenuations(l, &mut got);
@@ -416,14 +511,21 @@ mod tests {
                 }
             }
             // The table holds exactly `exact`'s value at every grid point (the rows share each
-            // group's exponentials but form the same products and sums).
+            // group's exponentials but form the same products and sums), and the derivative
+            // over ℓ beside it.
             let n = ch.len();
             let points = (0..ch.len)
                 .map(|i| i as f64 * ch.step_um)
                 .chain(ch.tail.clone());
             for (i, l) in points.enumerate() {
                 for (c, t) in ch.terms.iter().enumerate() {
-                    assert_eq!(ch.table[i * n + c].to_bits(), exact(t, l).to_bits());
+                    assert_eq!(ch.table[2 * i * n + c].to_bits(), exact(t, l).to_bits());
+                    let slope: f64 = t.iter().map(|&(m, k)| -m * k * attenuation(m * l)).sum();
+                    let got = ch.table[(2 * i + 1) * n + c];
+                    assert!(
+                        (got - slope).abs() <= 1e-12 * slope.abs() + 1e-300,
+                        "{got} {slope}"
+                    );
                 }
             }
             // White: every channel is 1 at any path.
