@@ -311,28 +311,47 @@ pub fn encode_slice(
             .collect()
     });
     let keep_in = |j: usize| keeps.as_ref().map_or(keep_bits, |k| k[j]);
+    // A part's values scaled to f32, and (f16) their halves: converted a slice at a time
+    // (`half`'s slice conversions run F16C several values per instruction where the
+    // processor has it; one call per value cost a sweep's writer more than the rounding).
+    let mut ys = vec![0f32; bins];
+    let mut hs = vec![half::f16::ZERO; if dtype == Precision::F16 { bins } else { 0 }];
     for k in 0..n_vc {
         let part = &values[k * bins..(k + 1) * bins];
         let max = part.iter().copied().fold(0.0, f64::max);
         let scale = pow2_scale(max);
         scales.push(scale);
-        for (j, &x) in part.iter().enumerate() {
-            let i = k * bins + j;
-            let y = (x / scale as f64) as f32;
-            // `keep_bits` first (the bytes of an unquantised table), then the bin's noise.
-            let keep = keep_in(j);
-            match dtype {
-                Precision::F16 => {
-                    let mut h = round_f16_bits(half::f16::from_f32(y).to_bits(), keep_bits);
+        for (y, &x) in ys.iter_mut().zip(part) {
+            *y = (x / scale as f64) as f32;
+        }
+        let out = &mut decoded[k * bins..(k + 1) * bins];
+        match dtype {
+            Precision::F16 => {
+                use half::slice::HalfFloatSliceExt;
+                hs.convert_from_f32_slice(&ys);
+                for (j, h) in hs.iter_mut().enumerate() {
+                    let i = k * bins + j;
+                    // `keep_bits` first (the bytes of an unquantised table), then the bin's
+                    // noise.
+                    let keep = keep_in(j);
+                    let mut b = round_f16_bits(h.to_bits(), keep_bits);
                     if keep < keep_bits {
-                        h = round_f16_bits(h, keep);
+                        b = round_f16_bits(b, keep);
                     }
-                    let b = h.to_le_bytes();
-                    raw[i] = b[0];
-                    raw[n + i] = b[1];
-                    decoded[i] = half::f16::from_bits(h).to_f32() * scale;
+                    let [lo, hi] = b.to_le_bytes();
+                    raw[i] = lo;
+                    raw[n + i] = hi;
+                    *h = half::f16::from_bits(b);
                 }
-                Precision::F32 => {
+                hs.convert_to_f32_slice(out);
+                for d in out.iter_mut() {
+                    *d *= scale;
+                }
+            }
+            Precision::F32 => {
+                for (j, (&y, d)) in ys.iter().zip(out.iter_mut()).enumerate() {
+                    let i = k * bins + j;
+                    let keep = keep_in(j);
                     let mut r = round_f32(y, keep_bits);
                     if keep < keep_bits {
                         r = round_f32(r, keep);
@@ -340,7 +359,7 @@ pub fn encode_slice(
                     for (s, byte) in r.to_le_bytes().into_iter().enumerate() {
                         raw[s * n + i] = byte;
                     }
-                    decoded[i] = r * scale;
+                    *d = r * scale;
                 }
             }
         }
