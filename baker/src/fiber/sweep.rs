@@ -433,20 +433,29 @@ mod tests {
         }
     }
 
+    /// 400–700 nm in 10 nm steps.
+    fn test_lambda() -> Vec<f64> {
+        (0..31).map(|i| 400.0 + 10.0 * i as f64).collect()
+    }
+
+    /// A variant on [`test_lambda`] with μa between k and 2k per µm, varying with λ.
+    fn test_variant(name: &str, k: f64) -> Variant {
+        Variant {
+            name: name.into(),
+            mua_per_um: test_lambda()
+                .iter()
+                .map(|l| k * (1.0 + ((l - 400.0) / 50.0).sin().abs()))
+                .collect(),
+        }
+    }
+
     /// Every channel, at 20,000 paths through the uniform and the geometric part, within the
     /// cubic Hermite bound of the module's docs: 1.3·10⁻⁵ of Σ|c|·exp(−μa ℓ) over its terms
     /// (of its value for a wavelength). Linear interpolation on the same grid errs by up to
     /// (0.25)²/8 = 8·10⁻³, a wrong derivative by more: either fails it.
     #[test]
     fn hermite_channels_within_their_bound() {
-        let lambda: Vec<f64> = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
-        let v = |name: &str, k: f64| Variant {
-            name: name.into(),
-            mua_per_um: lambda
-                .iter()
-                .map(|l| k * (1.0 + ((l - 400.0) / 50.0).sin().abs()))
-                .collect(),
-        };
+        let (lambda, v) = (test_lambda(), test_variant);
         let vars = [v("light", 0.002), v("deep", 0.05)];
         for kind in [ChannelKind::Rgb, ChannelKind::Spectral] {
             let ch = Channels::new(&vars, &lambda, kind, 40.0);
@@ -481,14 +490,7 @@ mod tests {
 
     #[test]
     fn interpolated_channels_match_exact_weights() {
-        let lambda: Vec<f64> = (0..31).map(|i| 400.0 + 10.0 * i as f64).collect();
-        let v = |name: &str, k: f64| Variant {
-            name: name.into(),
-            mua_per_um: lambda
-                .iter()
-                .map(|l| k * (1.0 + ((l - 400.0) / 50.0).sin().abs()))
-                .collect(),
-        };
+        let (lambda, v) = (test_lambda(), test_variant);
         let vars = [v("white", 0.0), v("light", 0.001), v("deep", 0.04)];
         for kind in [ChannelKind::Rgb, ChannelKind::Spectral] {
             let ch = Channels::new(&vars, &lambda, kind, 300.0);
