@@ -11,8 +11,9 @@ pub struct SegmentGrid {
     /// The padded bounding box of the segments.
     pub min: [f64; 2],
     pub max: [f64; 2],
-    /// Cell size and count per axis.
+    /// Cell size, its inverse and the count per axis.
     pub cell: [f64; 2],
+    pub inv_cell: [f64; 2],
     pub n: [usize; 2],
     start: Vec<u32>,
     items: Vec<u32>,
@@ -48,6 +49,7 @@ impl SegmentGrid {
             min,
             max,
             cell,
+            inv_cell: [1.0 / cell[0], 1.0 / cell[1]],
             n,
             start: Vec::new(),
             items: Vec::new(),
