@@ -10,11 +10,12 @@
 //! every channel is tabulated once over ℓ, with its exact derivative (Σ −μa·c·exp(−μa ℓ)),
 //! and interpolated by the cubic Hermite polynomial between two grid points (one fused row of
 //! all channels' values and derivatives per grid point). The cubic Hermite interpolant of
-//! g(ℓ) over a step Δ errs by at most Δ⁴/384 · max|g⁗| (Burden & Faires, *Numerical
-//! Analysis*, Thm. 3.9 with two double nodes); for one term exp(−μa ℓ) that is
-//! (μa Δ)⁴/384 of its value at the step's start, so every step keeps μa·Δ ≤ 0.25 for each
-//! term that matters there (≤ 1.02·10⁻⁵ of the term, 1.3·10⁻⁵ of its value anywhere in the
-//! step; linear interpolation needed μa·Δ ≤ 0.02 for 5·10⁻⁵, 12.5× the rows):
+//! g(ℓ) over a step Δ errs by at most Δ⁴/384 · max|g⁗| (the Hermite error with two double
+//! nodes a, b: g − H = g⁗(ξ)·(ℓ − a)²(ℓ − b)²/4!, and (ℓ − a)²(ℓ − b)² ≤ Δ⁴/16); for one
+//! term exp(−μa ℓ) that is (μa Δ)⁴/384 of its value at the step's start, so every step
+//! keeps μa·Δ ≤ 0.25 for each term that matters there (≤ 1.02·10⁻⁵ of the term, 1.3·10⁻⁵
+//! of its value anywhere in the step; linear interpolation needed μa·Δ ≤ 0.02 for 5·10⁻⁵,
+//! 12.5× the rows):
 //! - up to about 16 bounding diameters the grid is uniform with Δ = 0.25/μa,max;
 //! - beyond, it is geometric, Δ = ρ·ℓ with ρ = 0.25/50: a term with μa·ℓ ≤ 50 has
 //!   μa·Δ ≤ 0.25, and one with μa·ℓ > 50 is below e⁻⁵⁰ < 2⁻⁷² of its coefficient at both ends
