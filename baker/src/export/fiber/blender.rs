@@ -1,7 +1,7 @@
 //! `blender`: a Python script that builds a Principled Hair BSDF (Chiang model) material.
 
 use super::fit::FiberFit;
-use super::summary::summary;
+use super::summary::{exact, exact_list, summary};
 use crate::error::UsageError;
 use crate::export::ExportRequest;
 
@@ -47,17 +47,11 @@ pub fn write_blender(fit: &FiberFit) -> String {
         "import bpy\n\nMATERIAL = {:?}\nSIGMA_A = ({})\nBETA_M = {}\nBETA_N = {}\n\
          IOR = {}\nOFFSET_RAD = {}  # alpha = {:.4} deg\n\n",
         format!("baker {}", fit.variant),
-        // The fit's values as they are (the shortest decimals that read back as the same
-        // doubles), not rounded to 6 decimals: that is 2·10⁻⁵ of β_n = 0.02.
-        p.sigma_a
-            .iter()
-            .map(|x| x.to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
-        p.beta_m,
-        p.beta_n,
-        p.eta,
-        blender_offset_rad(p.alpha_deg),
+        exact_list(&p.sigma_a, ", "),
+        exact(p.beta_m),
+        exact(p.beta_n),
+        exact(p.eta),
+        exact(blender_offset_rad(p.alpha_deg)),
         p.alpha_deg,
     );
     s += r#"mat = bpy.data.materials.get(MATERIAL) or bpy.data.materials.new(MATERIAL)

@@ -2,7 +2,7 @@
 
 use super::channels::Channels;
 use super::fit::FiberFit;
-use super::summary::{list, summary};
+use super::summary::{exact, exact_list, summary};
 use crate::export::xml::xml_comment;
 
 /// An XML id from a variant name.
@@ -30,7 +30,10 @@ pub fn write_mitsuba(fit: &FiberFit) -> String {
     let id = xml_id(&fit.variant);
     s += "<scene version=\"3.0.0\">\n";
     s += &format!("    <bsdf type=\"hair\" id=\"{id}\">\n");
-    s += &format!("        <float name=\"int_ior\" value=\"{:.6}\"/>\n", p.eta);
+    s += &format!(
+        "        <float name=\"int_ior\" value=\"{}\"/>\n",
+        exact(p.eta)
+    );
     s += "        <float name=\"ext_ior\" value=\"1.0\"/>\n";
     match Channels::of(&fit.channels) {
         Channels::Spectral(nm) => {
@@ -38,7 +41,7 @@ pub fn write_mitsuba(fit: &FiberFit) -> String {
                 "        <spectrum name=\"sigma_a\" value=\"{}\"/>\n",
                 nm.iter()
                     .zip(&p.sigma_a)
-                    .map(|(l, v)| format!("{l}:{v:.6}"))
+                    .map(|(l, &v)| format!("{l}:{}", exact(v)))
                     .collect::<Vec<_>>()
                     .join(", ")
             )
@@ -46,21 +49,21 @@ pub fn write_mitsuba(fit: &FiberFit) -> String {
         _ => {
             s += &format!(
                 "        <rgb name=\"sigma_a\" value=\"{}\"/>\n",
-                list(&p.sigma_a, ", ")
+                exact_list(&p.sigma_a, ", ")
             )
         }
     }
     s += &format!(
-        "        <float name=\"longitudinal_roughness\" value=\"{:.6}\"/>\n",
-        p.beta_m
+        "        <float name=\"longitudinal_roughness\" value=\"{}\"/>\n",
+        exact(p.beta_m)
     );
     s += &format!(
-        "        <float name=\"azimuthal_roughness\" value=\"{:.6}\"/>\n",
-        p.beta_n
+        "        <float name=\"azimuthal_roughness\" value=\"{}\"/>\n",
+        exact(p.beta_n)
     );
     s += &format!(
-        "        <float name=\"scale_tilt\" value=\"{:.6}\"/>\n",
-        p.alpha_deg
+        "        <float name=\"scale_tilt\" value=\"{}\"/>\n",
+        exact(p.alpha_deg)
     );
     s += "    </bsdf>\n</scene>\n";
     s

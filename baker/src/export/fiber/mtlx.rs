@@ -26,7 +26,7 @@
 use std::fmt::Write as _;
 
 use super::fit::FiberFit;
-use super::summary::summary;
+use super::summary::{exact, exact_list, summary};
 use crate::export::xml::{xml_comment, xml_escape};
 
 /// MaterialX's (v, s) of R, TT and TRT for (β_m, β_n) ([module docs](self)).
@@ -51,13 +51,6 @@ fn identifier(s: &str) -> String {
         id.insert(0, '_');
     }
     id
-}
-
-fn f6(v: &[f64]) -> String {
-    v.iter()
-        .map(|x| format!("{x:.6}"))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// The `mtlx` target ([module docs](self)). The table must have R, G, B channels.
@@ -86,7 +79,7 @@ pub fn write_mtlx(fit: &FiberFit) -> String {
         p.beta_m,
         p.beta_n,
         p.alpha_deg,
-        f6(&p.sigma_a)
+        exact_list(&p.sigma_a, ", ")
     );
     let _ = writeln!(
         s,
@@ -102,17 +95,27 @@ pub fn write_mtlx(fit: &FiberFit) -> String {
     for lobe in ["R", "TT", "TRT"] {
         input(&mut s, &format!("tint_{lobe}"), "color3", "1, 1, 1".into());
     }
-    input(&mut s, "ior", "float", format!("{:.6}", p.eta));
+    input(&mut s, "ior", "float", exact(p.eta));
     for (lobe, vs) in ["R", "TT", "TRT"].iter().zip(rough) {
-        input(&mut s, &format!("roughness_{lobe}"), "vector2", f6(&vs));
+        input(
+            &mut s,
+            &format!("roughness_{lobe}"),
+            "vector2",
+            exact_list(&vs, ", "),
+        );
     }
     input(
         &mut s,
         "cuticle_angle",
         "float",
-        format!("{:.6}", mtlx_cuticle_angle(p.alpha_deg)),
+        exact(mtlx_cuticle_angle(p.alpha_deg)),
     );
-    input(&mut s, "absorption_coefficient", "vector3", f6(&p.sigma_a));
+    input(
+        &mut s,
+        "absorption_coefficient",
+        "vector3",
+        exact_list(&p.sigma_a, ", "),
+    );
     s += "  </chiang_hair_bsdf>\n";
     let _ = writeln!(
         s,

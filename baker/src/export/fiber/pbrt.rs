@@ -2,7 +2,7 @@
 
 use super::channels::Channels;
 use super::fit::FiberFit;
-use super::summary::{list, summary};
+use super::summary::{exact, exact_list, summary};
 
 /// pbrt-v4 `rgb`/`spectrum` value of σa.
 fn pbrt_sigma_a(fit: &FiberFit) -> String {
@@ -12,11 +12,11 @@ fn pbrt_sigma_a(fit: &FiberFit) -> String {
             "\"spectrum sigma_a\" [ {} ]",
             nm.iter()
                 .zip(s)
-                .map(|(l, v)| format!("{l} {v:.6}"))
+                .map(|(l, &v)| format!("{l} {}", exact(v)))
                 .collect::<Vec<_>>()
                 .join(" ")
         ),
-        _ => format!("\"rgb sigma_a\" [ {} ]", list(s, " ")),
+        _ => format!("\"rgb sigma_a\" [ {} ]", exact_list(s, " ")),
     }
 }
 
@@ -32,13 +32,13 @@ pub fn write_pbrt(fit: &FiberFit) -> String {
           #   beta_m, beta_n as in Chiang et al. 2016; alpha in degrees, the sign HairBxDF uses.\n\
           # Use it on \"curve\" shapes (type \"cylinder\") whose direction is the fiber's +z.\n";
     s += &format!(
-        "Material \"hair\"\n    {}\n    \"float eta\" [ {:.6} ]\n    \"float beta_m\" [ {:.6} ]\n    \
-         \"float beta_n\" [ {:.6} ]\n    \"float alpha\" [ {:.6} ]\n",
+        "Material \"hair\"\n    {}\n    \"float eta\" [ {} ]\n    \"float beta_m\" [ {} ]\n    \
+         \"float beta_n\" [ {} ]\n    \"float alpha\" [ {} ]\n",
         pbrt_sigma_a(fit),
-        p.eta,
-        p.beta_m,
-        p.beta_n,
-        p.alpha_deg
+        exact(p.eta),
+        exact(p.beta_m),
+        exact(p.beta_n),
+        exact(p.alpha_deg)
     );
     s
 }

@@ -2,6 +2,19 @@
 
 use super::fit::FiberFit;
 
+/// `x` exactly: the shortest decimal that reads back as the same double (f64 `Display`, no
+/// exponent). What the engine files carry; 6 decimals would move β_n = 0.02 by 2·10⁻⁵ of
+/// itself.
+pub(super) fn exact(x: f64) -> String {
+    format!("{x}")
+}
+
+/// [`exact`] values joined by `sep`.
+pub(super) fn exact_list(v: &[f64], sep: &str) -> String {
+    v.iter().map(|&x| exact(x)).collect::<Vec<_>>().join(sep)
+}
+
+/// Values rounded to 6 decimals, for the summary's words.
 pub(super) fn list(v: &[f64], sep: &str) -> String {
     v.iter()
         .map(|x| format!("{x:.6}"))
