@@ -18,4 +18,5 @@ try() { # patch, variable, values…
 try branch-cap.patch BAKER_BRANCHES 0 1 4 8
 try stay-children.patch BAKER_STAYS 1 2 4
 try child-draws.patch BAKER_CHILD_DRAWS 1 4
+try split-child.patch BAKER_SPLIT_CHILD 0 1
 cargo build --release -q
