@@ -36,6 +36,7 @@ use smallvec::SmallVec;
 
 use super::surface::{basis, dot, normalize, reflect, refract, FacetPdf};
 use super::Surface;
+use crate::math::avx2::avx2_dispatch;
 use formats::AngularGrid;
 
 /// Slope radius of the window's ring, in units of the RMS slope α.
@@ -95,26 +96,17 @@ impl LobeGrid {
         }
     }
 
-    /// The lobe of event `e`: a cone about the exit through the mean normal (reflection from
-    /// outside, refraction from inside) as wide as the exits through facets of slope
-    /// [`WINDOW_SLOPES`]·α, and the bins its bounding box covers. None when the surface is
-    /// smooth, the mean normal reflects the photon back inside (total internal reflection),
-    /// or the window would exceed [`MAX_WINDOW_BINS`].
-    pub fn lobe(&self, s: &Surface, e: &Event) -> Option<Lobe> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked above).
-            return unsafe { self.lobe_avx2(s, e) };
-        }
-        self.lobe_in(s, e)
-    }
-
-    /// [`LobeGrid::lobe`] where the processor has AVX2: the same IEEE operations (no fused
-    /// multiply-add), the facet loop 4 lanes wide and `floor` one instruction.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn lobe_avx2(&self, s: &Surface, e: &Event) -> Option<Lobe> {
-        self.lobe_in(s, e)
+    avx2_dispatch! {
+        /// The lobe of event `e`: a cone about the exit through the mean normal (reflection
+        /// from outside, refraction from inside) as wide as the exits through facets of slope
+        /// [`WINDOW_SLOPES`]·α, and the bins its bounding box covers. None when the surface is
+        /// smooth, the mean normal reflects the photon back inside (total internal
+        /// reflection), or the window would exceed [`MAX_WINDOW_BINS`].
+        ///
+        /// Under AVX2 (`avx2_dispatch!`) the facet loop runs 4 lanes wide and `floor` is one
+        /// instruction: the same IEEE operations (no fused multiply-add), so the same bits.
+        pub fn lobe(&self as LobeGrid, s: &Surface, e: &Event) -> Option<Lobe>
+            => LobeGrid::lobe_in
     }
 
     #[inline(always)]

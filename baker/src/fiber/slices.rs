@@ -68,6 +68,7 @@ use super::tracer::shared::{SharedExits, Windows, MAX_SHARED};
 use super::tracer::{Draws, Exits, PhotonStats, Setup};
 use super::{Fiber, Incident};
 use crate::cancel::{Cancel, Cancelled};
+use crate::math::avx2::avx2_dispatch;
 use crate::math::rng::{batch_rng, uniform, BatchRng};
 use crate::math::sampler::{PathSampler, Scramble};
 use formats::{AngularGrid, Precision};
@@ -906,23 +907,13 @@ impl SharedExits for ChannelScore<'_> {
     }
 }
 
-/// `out += w·row`, element by element: a sweep's exit adds one such row (every variant's
-/// channels) per bin its lobe covers, the largest per-variant cost of a sweep. Under AVX2 in
-/// 8 lanes, otherwise 4; the same IEEE operations (no fused multiply-add), so the same bits.
-#[inline]
-fn add_scaled(out: &mut [f32], w: f32, row: &[f32]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2 (checked above).
-        return unsafe { add_scaled_avx2(out, w, row) };
-    }
-    add_scaled_in(out, w, row)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn add_scaled_avx2(out: &mut [f32], w: f32, row: &[f32]) {
-    add_scaled_in(out, w, row)
+avx2_dispatch! {
+    /// `out += w·row`, element by element: a sweep's exit adds one such row (every
+    /// variant's channels) per bin its lobe covers, the largest per-variant cost of a sweep.
+    /// Under AVX2 in 8 lanes, otherwise 4; the same IEEE operations (no fused multiply-add),
+    /// so the same bits.
+    #[inline]
+    fn add_scaled(out: &mut [f32], w: f32, row: &[f32]) => add_scaled_in
 }
 
 #[inline(always)]

@@ -18,6 +18,7 @@
 //! [^heitz14b]: E. Heitz, E. d'Eon, "Importance sampling microfacet-based BSDFs using the
 //!     distribution of visible normals", EGSR 2014, §5 (V-cavity sampling).
 
+use crate::math::avx2::avx2_dispatch;
 use crate::math::exp::exp_neg_f32;
 use crate::math::fresnel;
 use crate::math::turns::sin_cos_turns;
@@ -328,24 +329,20 @@ impl FacetPdf {
         })
     }
 
-    /// `out[i]` = the density at (`x[i]`, `y[i]`, `z[i]`) where `mask[i]` is set, else 0, for
-    /// i below `out.len()`: bit for bit the values of [`FacetPdf::eval`], in one pass the
-    /// compiler vectorises (8 lanes where the processor has AVX2: the same IEEE operations lane
-    /// by lane, no fused multiply-add, so the same bits on every x86-64 machine).
-    pub fn eval_many(&self, x: &[f32], y: &[f32], z: &[f32], mask: &[bool], out: &mut [f32]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked above).
-            unsafe { self.eval_many_avx2(x, y, z, mask, out) };
-            return;
-        }
-        self.eval_many_lanes(x, y, z, mask, out);
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn eval_many_avx2(&self, x: &[f32], y: &[f32], z: &[f32], mask: &[bool], out: &mut [f32]) {
-        self.eval_many_lanes(x, y, z, mask, out);
+    avx2_dispatch! {
+        /// `out[i]` = the density at (`x[i]`, `y[i]`, `z[i]`) where `mask[i]` is set, else 0,
+        /// for i below `out.len()`: bit for bit the values of [`FacetPdf::eval`], in one pass
+        /// the compiler vectorises (8 lanes where the processor has AVX2: the same IEEE
+        /// operations lane by lane, no fused multiply-add, so the same bits on every x86-64
+        /// machine).
+        pub fn eval_many(
+            &self as FacetPdf,
+            x: &[f32],
+            y: &[f32],
+            z: &[f32],
+            mask: &[bool],
+            out: &mut [f32],
+        ) => FacetPdf::eval_many_lanes
     }
 
     #[inline(always)]

@@ -45,6 +45,7 @@
 //! adds per photon whatever the sweep) and multiply it by the channel table at the end —
 //! exactly the same interpolated result, at a cost independent of the number of variants.
 
+use crate::math::avx2::avx2_dispatch;
 use crate::math::exp::exp_neg_f64;
 use crate::spectral::ColourMap;
 use rayon::prelude::*;
@@ -232,11 +233,6 @@ impl Channels {
         };
         let n = self.terms.len();
         let rows = &self.table[2 * i * n..2 * (i + 2) * n];
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the processor has AVX2 (checked above).
-            return unsafe { hermite_avx2(rows, t, h, out) };
-        }
         hermite(rows, t, h, out)
     }
 
@@ -274,7 +270,7 @@ impl Channels {
 /// g(t) = h₀₀ g₀ + h₀₁ g₁ + h·(h₁₀ g′₀ + h₁₁ g′₁) with the Hermite basis h₀₀ = (1 + 2t)(1 − t)²,
 /// h₀₁ = t²(3 − 2t), h₁₀ = t(1 − t)², h₁₁ = −t²(1 − t). At t = 0 it is g₀ exactly.
 #[inline(always)]
-fn hermite(rows: &[f64], t: f64, h: f64, out: &mut [f64]) {
+fn hermite_in(rows: &[f64], t: f64, h: f64, out: &mut [f64]) {
     let n = out.len();
     let s = 1.0 - t;
     let (h00, h01) = ((1.0 + 2.0 * t) * s * s, t * t * (3.0 - 2.0 * t));
@@ -287,10 +283,9 @@ fn hermite(rows: &[f64], t: f64, h: f64, out: &mut [f64]) {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn hermite_avx2(rows: &[f64], t: f64, h: f64, out: &mut [f64]) {
-    hermite(rows, t, h, out)
+avx2_dispatch! {
+    /// [`hermite_in`], under AVX2 where the processor has it.
+    fn hermite(rows: &[f64], t: f64, h: f64, out: &mut [f64]) => hermite_in
 }
 
 /// Consecutive channels whose terms share one list of μa (a variant's R, G and B): each row
@@ -330,25 +325,14 @@ impl Group {
     }
 }
 
-/// One row of the table: every channel at path `l` µm, each the same sum of the same products
-/// [`exact`] forms (so the same bits), then every channel's derivative over ℓ (the sum of
-/// c·(−μa·exp(−μa ℓ))), with each group's attenuations evaluated once, in a loop that
-/// vectorises (4 lanes under AVX2, 2 otherwise; the same IEEE operations, no fused
-/// multiply-add, so the same bits on every x86-64).
-/// `e` holds a group's attenuations (reused from row to row).
-fn fill_row(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2 (checked above).
-        return unsafe { fill_row_avx2(groups, l, row, e) };
-    }
-    fill_row_in(groups, l, row, e)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn fill_row_avx2(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) {
-    fill_row_in(groups, l, row, e)
+avx2_dispatch! {
+    /// One row of the table: every channel at path `l` µm, each the same sum of the same
+    /// products [`exact`] forms (so the same bits), then every channel's derivative over ℓ (the
+    /// sum of c·(−μa·exp(−μa ℓ))), with each group's attenuations evaluated once, in a loop
+    /// that vectorises (4 lanes under AVX2, 2 otherwise; the same IEEE operations, no fused
+    /// multiply-add, so the same bits on every x86-64).
+    /// `e` holds a group's attenuations (reused from row to row).
+    fn fill_row(groups: &[Group], l: f64, row: &mut [f64], e: &mut Vec<f64>) => fill_row_in
 }
 
 #[inline(always)]

@@ -1,6 +1,8 @@
-//! Numerical building blocks shared by the physics: random streams and their seeds,
-//! quadrature rules, Fresnel factors, a vectorisable exponential and sin/cos of angles in turns.
+//! Numerical building blocks shared by the physics: run-time AVX2 dispatch, random streams
+//! and their seeds, quadrature rules, Fresnel factors, a vectorisable exponential and sin/cos
+//! of angles in turns.
 
+pub mod avx2;
 pub mod exp;
 pub mod fresnel;
 pub mod poly;
