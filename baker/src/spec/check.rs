@@ -267,7 +267,7 @@ impl Ctx {
                 self.out_of_range(
                     loc(s),
                     field,
-                    s.value.to_string(),
+                    num(s.value),
                     format!("[{}, {}], a whole number", bound(lo), bound(hi)),
                 );
                 default

@@ -277,6 +277,12 @@ case("path_spec_named_cache", f"# a spec whose file name would name the cache fo
 case("path_spec_named_dotdot", f"# a spec whose stem is ..\nentries:\n  - {E}\n", 2,
      ["output folder name"], file="...yaml", no_line=True)
 
+# --- huge numbers are printed as written, not as 300 digits ------------------------------------
+fiber("fiber_split_1e300", ["{name: a, type: silk}"], 2, ["bake.split = 1e300 is out of range"],
+      head="bake: {resolution_deg: 30, split: 1e300}\n")
+fiber("fiber_keep_bits_1e300", ["{name: a, type: polyester}"], 2, ["bake.keep_bits = 1e300 is out of range"],
+      head="bake: {resolution_deg: 30, photons_per_direction: 64, keep_bits: 1e300}\n")
+
 
 def png(w, h, rows_zlib, bit_depth=1, color=0):
     """A PNG of `w`×`h` with the given (already compressed) IDAT payload."""

@@ -7,7 +7,7 @@ use super::FiberCx;
 use crate::fiber::slices::{BakeSettings, Estimators, ExpectedExits, NoiseTarget, Sampling};
 use crate::fiber::sweep::ChannelKind;
 use crate::fiber::tracer::shared::MAX_SHARED;
-use crate::spec::check::{loc, Bounds};
+use crate::spec::check::{loc, num, Bounds};
 use crate::spec::limits::{wavelength_count, Limits};
 use crate::spec::skin::raw::Token;
 use crate::spec::yaml::Spanned;
@@ -314,7 +314,7 @@ impl FiberCx {
                 self.out_of_range(
                     loc(k),
                     "bake.keep_bits",
-                    k.value.to_string(),
+                    num(k.value),
                     format!("a whole number in [0, {bits}] ({name} has {bits} mantissa bits)"),
                 );
                 bits
