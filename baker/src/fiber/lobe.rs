@@ -24,6 +24,11 @@
 //! which the draw then scores. Windows near a pole span every Δφ; a window larger than
 //! [`MAX_WINDOW_BINS`] is not evaluated (its event is drawn plainly), which bounds the cost.
 //!
+//! Only a photon's main path scores in expectation. The plain branches a split event starts
+//! (weight w/split each, [`super::tracer`]) score their exits by their draw: a window costs
+//! the same whatever the weight it scores, and cotton's lumen-facing events start about 29
+//! branches each.
+//!
 //! Cost: a window holds tens (polyester at 2°) to thousands (cotton) of bins, so the densities
 //! dominate. The bins' directions come from per-grid tables (sin and cos of the θ edges and of
 //! the column steps, the ring's azimuths), and the densities of 64 bins at a time from one

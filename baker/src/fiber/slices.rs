@@ -80,7 +80,8 @@ use rand_core::Rng;
 pub enum ExpectedExits {
     /// None: every exit is a draw.
     None,
-    /// The exit lobes of events met from inside (TT, TRT, …).
+    /// The exit lobes of events met from inside (TT, TRT, …) on each photon's main path
+    /// (the plain branches a split event starts score theirs by their draw).
     Inside,
     /// Those and the reflection lobe R of the first event, scored by a pass of launches of
     /// its own ([`super::tracer`]'s `first_reflection`).

@@ -511,9 +511,15 @@ impl<'a> Setup<'a> {
                 return st;
             }
             let free = self.leaves_freely(id);
-            // Expected-value scoring of the first-facet exit lobe ([`super::lobe`]).
-            let ev = if free {
-                self.expected(&ray, n_out, main, u, emit)
+            // Expected-value scoring of the first-facet exit lobe ([`super::lobe`]), on the
+            // main path only. A child (a plain walk of weight w/split that a split event
+            // starts) scores its exits by its one draw: as unbiased, and far cheaper, since a
+            // window costs the same whatever the walk's weight and a lumen-facing event in
+            // cotton starts about 29 children. Cotton reaches the thesis's noise 1.56× sooner
+            // so; silk, whose concavities start few children, as soon (record
+            // 2026-12-08-fiber-dispatch-macro).
+            let ev = if free && main {
+                self.expected(&ray, n_out, u, emit)
             } else {
                 None
             };
@@ -604,11 +610,10 @@ impl<'a> Setup<'a> {
         &self,
         ray: &Ray,
         n_out: [f64; 3],
-        main: bool,
         u: &mut PathSampler,
         emit: &mut impl Exits,
     ) -> Option<(Lobe, Option<f64>)> {
-        if main && ray.events == 1 && self.first_reflection_pass() {
+        if ray.events == 1 && self.first_reflection_pass() {
             let e = Event {
                 d: ray.dir,
                 nf: n_out,

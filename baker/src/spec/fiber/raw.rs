@@ -42,9 +42,10 @@ pub struct RawBake {
     /// many times per photon (a whole number; 1 = plain tracing). Never fewer than `split`:
     /// a smaller value draws `split` times (and the manifest records `split`).
     pub exit_draws: Option<Spanned<f64>>,
-    /// Expected-value exit scoring: `none`; `inside`, where a path leaves through a rough
-    /// boundary from inside (TT, TRT, …) its exit lobe is scored over the outgoing bins in
-    /// expectation instead of one draw; `all`, and the first reflection R too.
+    /// Expected-value exit scoring: `none`; `inside`, where a photon's main path leaves
+    /// through a rough boundary from inside (TT, TRT, …) its exit lobe is scored over the
+    /// outgoing bins in expectation instead of one draw (the branches a split event starts
+    /// score theirs by their draw); `all`, and the first reflection R too.
     pub expected_exits: Option<Spanned<String>>,
     /// Where the photons take their uniform numbers: `random`, or `sobol` (each batch of
     /// photons one randomised Sobol' point set over the launch and the first boundary
