@@ -511,13 +511,7 @@ impl<'a> Setup<'a> {
                 return st;
             }
             let free = self.leaves_freely(id);
-            // Expected-value scoring of the first-facet exit lobe ([`super::lobe`]), on the
-            // main path only. A child (a plain walk of weight w/split that a split event
-            // starts) scores its exits by its one draw: as unbiased, and far cheaper, since a
-            // window costs the same whatever the walk's weight and a lumen-facing event in
-            // cotton starts about 29 children. Cotton reaches the thesis's noise 1.56× sooner
-            // so; silk, whose concavities start few children, as soon (record
-            // 2026-12-08-fiber-dispatch-macro).
+            // Exit lobes in expectation on the main path only; children draw ([`super::lobe`]).
             let ev = if free && main {
                 self.expected(&ray, n_out, u, emit)
             } else {
