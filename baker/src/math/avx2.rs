@@ -25,16 +25,8 @@ macro_rules! avx2_dispatch {
     ) => {
         $(#[$meta])*
         $vis fn $name(&self $(, $arg: $ty)*) $(-> $ret)? {
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                #[target_feature(enable = "avx2")]
-                fn avx2(this: &$self_ty $(, $arg: $ty)*) $(-> $ret)? {
-                    $body(this $(, $arg)*)
-                }
-                // SAFETY: the processor has AVX2 (checked above).
-                return unsafe { avx2(self $(, $arg)*) };
-            }
-            $body(self $(, $arg)*)
+            let this = self;
+            avx2_dispatch!(@call $body; ($($ret)?); this: &$self_ty $(, $arg: $ty)*)
         }
     };
     (
@@ -43,18 +35,22 @@ macro_rules! avx2_dispatch {
     ) => {
         $(#[$meta])*
         $vis fn $name($($arg: $ty),*) $(-> $ret)? {
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                #[target_feature(enable = "avx2")]
-                fn avx2($($arg: $ty),*) $(-> $ret)? {
-                    $body($($arg),*)
-                }
-                // SAFETY: the processor has AVX2 (checked above).
-                return unsafe { avx2($($arg),*) };
-            }
-            $body($($arg),*)
+            avx2_dispatch!(@call $body; ($($ret)?); $($arg: $ty),*)
         }
     };
+    // The dispatch both forms share: `$body(args…)` from an AVX2 copy, else directly.
+    (@call $body:path; ($($ret:ty)?); $($arg:ident: $ty:ty),*) => {{
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            #[target_feature(enable = "avx2")]
+            fn avx2($($arg: $ty),*) $(-> $ret)? {
+                $body($($arg),*)
+            }
+            // SAFETY: the processor has AVX2 (checked above).
+            return unsafe { avx2($($arg),*) };
+        }
+        $body($($arg),*)
+    }};
 }
 
 pub(crate) use avx2_dispatch;
